@@ -1,0 +1,13 @@
+//! partscene: part-level interactive scene reconstruction from part-segmented 3D scans
+//! (Part-level Scene Reconstruction Affords Robot Interaction, IROS 2023).
+//!
+//! Data flows one way: scan → parts → primitives → contact graph → tree → joints → refined
+//! scene → exports. See `ARCHITECTURE.md` for the module map and invariants.
+
+pub mod kinematics;
+pub mod math;
+pub mod model;
+pub mod primitive;
+pub mod report;
+pub mod scan;
+pub mod truth;

@@ -1,0 +1,93 @@
+//! The reconstructed interactive scene: what the pipeline produces, the editor shows, `eval`
+//! scores and the exporters write.
+
+use serde::{Deserialize, Serialize};
+
+use crate::kinematics::Joint;
+use crate::primitive::Primitive;
+use crate::report::Warning;
+use crate::scan::{ObjectId, PartId};
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct SceneModel {
+    pub source: String,
+    /// Fitted parts, sorted by id.
+    pub parts: Vec<PartModel>,
+    /// The kinematic forest: one joint per non-root part (parent → child), sorted by child.
+    pub joints: Vec<Joint>,
+    /// Candidate contact edges (the directed graph before Edmonds), sorted by (parent, child).
+    pub contact_edges: Vec<ContactEdge>,
+    /// Objects, sorted by id.
+    pub objects: Vec<ObjectModel>,
+    /// Object-level relations (support, proximity), sorted.
+    pub relations: Vec<ObjectRelation>,
+    /// Floor height (z), metres.
+    pub floor_z: f32,
+    pub warnings: Vec<Warning>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PartModel {
+    pub id: PartId,
+    pub object: ObjectId,
+    pub label: String,
+    pub primitive: Primitive,
+    /// Mean distance from the part's points to the primitive surface, metres.
+    pub fit_error: f32,
+    pub point_count: usize,
+}
+
+/// A candidate parent → child contact (paper eq. 1–2): weight = max contact ratio Cont.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactEdge {
+    pub parent: PartId,
+    pub child: PartId,
+    pub weight: f32,
+    /// Whether Edmonds kept it in the tree.
+    pub in_tree: bool,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ObjectModel {
+    pub id: ObjectId,
+    pub category: String,
+    /// Root part of the object's kinematic tree.
+    pub root_part: PartId,
+    /// What the object stands on: `None` for the floor, else the supporting part.
+    pub supported_by_part: Option<PartId>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RelationKind {
+    /// `from` supports `to` (None = the floor).
+    Support,
+    /// `from` and `to` are near each other (no support).
+    Proximity,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct ObjectRelation {
+    pub kind: RelationKind,
+    /// None = the floor.
+    pub from: Option<ObjectId>,
+    pub to: ObjectId,
+}
+
+impl SceneModel {
+    #[must_use]
+    pub fn part(&self, id: PartId) -> Option<&PartModel> {
+        self.parts.binary_search_by_key(&id, |p| p.id).ok().map(|i| &self.parts[i])
+    }
+
+    /// The joint whose child is `child`.
+    #[must_use]
+    pub fn joint_of(&self, child: PartId) -> Option<&Joint> {
+        self.joints.iter().find(|j| j.child == child)
+    }
+
+    /// Parts of one object, in id order.
+    pub fn parts_of(&self, object: ObjectId) -> impl Iterator<Item = &PartModel> {
+        self.parts.iter().filter(move |p| p.object == object)
+    }
+}
