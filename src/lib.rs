@@ -4,10 +4,16 @@
 //! Data flows one way: scan → parts → primitives → contact graph → tree → joints → refined
 //! scene → exports. See `ARCHITECTURE.md` for the module map and invariants.
 
+pub mod contact;
+pub mod export;
 pub mod kinematics;
 pub mod math;
 pub mod model;
+pub mod pipeline;
 pub mod primitive;
+pub mod refine;
 pub mod report;
 pub mod scan;
+pub mod scene;
+pub mod tree;
 pub mod truth;

@@ -1,5 +1,7 @@
 //! Joints from part labels and geometry: type, axis, pivot and limits.
 
+mod assign;
 mod joint;
 
+pub use assign::{KinematicsConfig, estimate_joint, joint_kind_for_label, label_tokens, outward_direction};
 pub use joint::{Joint, JointKind};

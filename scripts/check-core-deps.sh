@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# The core (built with --no-default-features) must not depend on GUI or viewer crates.
+# Like rerun's forbidden-dependency check: fail loudly, naming the crate and the path to it.
+set -euo pipefail
+forbidden='^(egui|eframe|egui-wgpu|egui_kittest|wgpu|winit|rerun|re_[a-z_]+)$'
+tree=$(cargo tree --no-default-features -e normal --prefix none --format '{p}' 2>/dev/null | awk '{print $1}' | sort -u)
+bad=$(echo "$tree" | grep -E "$forbidden" || true)
+if [ -n "$bad" ]; then
+  echo "error: the core dependency tree contains GUI/viewer crates:" >&2
+  echo "$bad" >&2
+  for c in $bad; do cargo tree --no-default-features -e normal -i "$c" >&2 || true; done
+  exit 1
+fi
+# No core module may import them either.
+leaks=$(grep -rlE '^\s*(pub )?use (egui|eframe|egui_wgpu|wgpu|winit|rerun)\b' src \
+  | grep -vE '^src/(app|render|web\.rs|observe/rerun\.rs)' || true)
+if [ -n "$leaks" ]; then
+  echo "error: core modules import GUI/viewer crates:" >&2
+  echo "$leaks" >&2
+  exit 1
+fi
+echo "core dependency check: ok ($(echo "$tree" | wc -l) crates, none forbidden)"

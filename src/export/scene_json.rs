@@ -1,0 +1,109 @@
+//! `scene.json`: the part-level contact graph as `../shared/spec/scan-format.md` §2 specifies it,
+//! plus objects, their relations, the candidate contact edges and warnings.
+
+use serde::{Deserialize, Serialize};
+
+use crate::kinematics::Joint;
+use crate::model::{ContactEdge, ObjectModel, ObjectRelation, PartModel, SceneModel};
+use crate::primitive::Primitive;
+use crate::report::Warning;
+use crate::scan::{ObjectId, PartId};
+
+pub const SCENE_FORMAT: &str = "partscene-scene/1";
+
+#[derive(Serialize, Deserialize)]
+struct SceneJson {
+    format: String,
+    source: String,
+    floor_z: f32,
+    parts: Vec<PartJson>,
+    joints: Vec<Joint>,
+    objects: Vec<ObjectModel>,
+    relations: Vec<ObjectRelation>,
+    contact_edges: Vec<ContactEdge>,
+    #[serde(default)]
+    warnings: Vec<Warning>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct PartJson {
+    id: PartId,
+    object: ObjectId,
+    label: String,
+    urdf_link: String,
+    primitive: Primitive,
+    fit_error: f32,
+    #[serde(default)]
+    point_count: usize,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneJsonError {
+    #[error("{path}: not a partscene scene.json: {message}")]
+    Parse { path: String, message: String },
+    #[error("{path}: format is {found:?}, expected {SCENE_FORMAT:?}")]
+    Format { path: String, found: String },
+    #[error("{path}: cannot read: {source}")]
+    Io { path: String, source: std::io::Error },
+}
+
+/// `scene.json` text of a scene.
+#[must_use]
+pub fn scene_json(scene: &SceneModel) -> String {
+    let doc = SceneJson {
+        format: SCENE_FORMAT.to_owned(),
+        source: scene.source.clone(),
+        floor_z: scene.floor_z,
+        parts: scene
+            .parts
+            .iter()
+            .map(|p| PartJson {
+                id: p.id,
+                object: p.object,
+                label: p.label.clone(),
+                urdf_link: super::link_name(scene, p),
+                primitive: p.primitive,
+                fit_error: p.fit_error,
+                point_count: p.point_count,
+            })
+            .collect(),
+        joints: scene.joints.clone(),
+        objects: scene.objects.clone(),
+        relations: scene.relations.clone(),
+        contact_edges: scene.contact_edges.clone(),
+        warnings: scene.warnings.clone(),
+    };
+    // Serialising plain data to a string cannot fail.
+    serde_json::to_string_pretty(&doc).unwrap_or_default()
+}
+
+/// Parses `scene.json` text back into a scene (`path` names it in errors).
+pub fn scene_from_json(text: &str, path: &str) -> Result<SceneModel, SceneJsonError> {
+    let doc: SceneJson = serde_json::from_str(text).map_err(|e| SceneJsonError::Parse { path: path.to_owned(), message: e.to_string() })?;
+    if doc.format != SCENE_FORMAT {
+        return Err(SceneJsonError::Format { path: path.to_owned(), found: doc.format });
+    }
+    let mut parts: Vec<PartModel> = doc
+        .parts
+        .into_iter()
+        .map(|p| PartModel { id: p.id, object: p.object, label: p.label, primitive: p.primitive, fit_error: p.fit_error, point_count: p.point_count })
+        .collect();
+    parts.sort_by_key(|p| p.id);
+    Ok(SceneModel {
+        source: doc.source,
+        parts,
+        joints: doc.joints,
+        contact_edges: doc.contact_edges,
+        objects: doc.objects,
+        relations: doc.relations,
+        floor_z: doc.floor_z,
+        warnings: doc.warnings,
+    })
+}
+
+/// Reads `scene.json` from a file.
+pub fn read_scene_json(path: &std::path::Path) -> Result<SceneModel, SceneJsonError> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| SceneJsonError::Io { path: name.clone(), source })?;
+    scene_from_json(&text, &name)
+}

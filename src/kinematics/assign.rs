@@ -1,0 +1,251 @@
+//! Joint templates by part label, fitted to the geometry (paper III-B: "matching the primitive
+//! parts to a library of articulated templates").
+//!
+//! | label words | joint | axis | pivot / origin | limits |
+//! | --- | --- | --- | --- | --- |
+//! | handle, pull, bar, leg, body, ... (anything else) | fixed | — | child centre | 0 |
+//! | drawer, tray | prismatic | the parent's face normal the part sits on, outward | child centre | 0 .. `drawer_travel` × parent depth |
+//! | door, lid, flap, hatch | revolute | the door edge away from its handle (vertical for side doors without one) | on that edge, at the door's back face | 0 .. `revolute_upper_rad` |
+//! | knob, dial | revolute | the outward face normal | knob centre | −π .. π |
+//! | button, switch | prismatic | into the parent | button centre | 0 .. `button_travel_m` |
+//!
+//! Axes are signed so that positive motion opens: a drawer slides out, a door swings away from
+//! its parent.
+
+use serde::{Deserialize, Serialize};
+
+use super::joint::{Joint, JointKind};
+use crate::math::{UP, Vec3};
+use crate::primitive::Primitive;
+use crate::scan::PartId;
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct KinematicsConfig {
+    /// Upper limit of doors and lids, radians.
+    pub revolute_upper_rad: f32,
+    /// A drawer slides out this fraction of its parent's depth.
+    pub drawer_travel: f32,
+    /// Travel of a button, metres.
+    pub button_travel_m: f32,
+}
+
+impl Default for KinematicsConfig {
+    fn default() -> Self {
+        Self { revolute_upper_rad: std::f32::consts::FRAC_PI_2, drawer_travel: 0.85, button_travel_m: 0.005 }
+    }
+}
+
+/// The lowercase words of a label ("Door_Left" → "door", "left").
+pub fn label_tokens(label: &str) -> impl Iterator<Item = String> + '_ {
+    label.split(|c: char| !c.is_ascii_alphabetic()).filter(|t| !t.is_empty()).map(str::to_ascii_lowercase)
+}
+
+/// The joint type a label calls for; unknown labels are rigid.
+#[must_use]
+pub fn joint_kind_for_label(label: &str) -> JointKind {
+    let tokens: Vec<String> = label_tokens(label).collect();
+    let has = |words: &[&str]| tokens.iter().any(|t| words.contains(&t.as_str()));
+    if has(&["handle", "handles", "pull", "grip", "bar"]) {
+        JointKind::Fixed
+    } else if has(&["knob", "knobs", "dial", "valve"]) {
+        JointKind::Revolute
+    } else if has(&["button", "buttons", "switch"]) {
+        JointKind::Prismatic
+    } else if has(&["drawer", "drawers", "tray"]) {
+        JointKind::Prismatic
+    } else if has(&["door", "doors", "lid", "flap", "hatch"]) {
+        JointKind::Revolute
+    } else {
+        JointKind::Fixed
+    }
+}
+
+fn is_rotary_knob(label: &str) -> bool {
+    label_tokens(label).any(|t| matches!(t.as_str(), "knob" | "knobs" | "dial" | "valve"))
+}
+
+fn is_button(label: &str) -> bool {
+    label_tokens(label).any(|t| matches!(t.as_str(), "button" | "buttons" | "switch"))
+}
+
+/// The direction in which `child` sticks out of `parent`: one of the parent's six face normals,
+/// the one the child lies farthest along (relative to the parent's half extent), with the
+/// handle's offset as extra evidence (a handle sticks out of the front).
+#[must_use]
+pub fn outward_direction(parent: &Primitive, child: &Primitive, handle: Option<Vec3>) -> Vec3 {
+    let axes = parent.axes_world();
+    let half = parent.size * 0.5;
+    let offset = child.center() - parent.center();
+    let handle_dir = handle.map(|h| (h - child.center()).normalize_or_zero());
+    let mut best = (f32::NEG_INFINITY, axes[0]);
+    for (k, axis) in axes.iter().enumerate() {
+        for side in [1.0_f32, -1.0] {
+            let n = *axis * side;
+            let mut score = offset.dot(n) / half[k].max(1e-3);
+            if let Some(d) = handle_dir {
+                score += 0.5 * d.dot(n);
+            }
+            if score > best.0 + 1e-6 {
+                best = (score, n);
+            }
+        }
+    }
+    best.1
+}
+
+/// Estimates the joint between `parent` and `child` of the given kind. `handle` is the centre of a
+/// handle or knob mounted on the child, if it has one.
+#[must_use]
+pub fn estimate_joint(
+    parent_id: PartId,
+    parent: &Primitive,
+    child_id: PartId,
+    child: &Primitive,
+    child_label: &str,
+    kind: JointKind,
+    handle: Option<Vec3>,
+    cfg: &KinematicsConfig,
+) -> Joint {
+    let out = outward_direction(parent, child, handle);
+    let mut joint = Joint {
+        parent: parent_id,
+        child: child_id,
+        kind,
+        axis_world: out,
+        origin_world: child.center(),
+        lower: 0.0,
+        upper: 0.0,
+    };
+    match kind {
+        JointKind::Fixed => {}
+        JointKind::Prismatic if is_button(child_label) => {
+            joint.axis_world = -out;
+            joint.upper = cfg.button_travel_m;
+        }
+        JointKind::Prismatic => {
+            let depth = extent_along(parent, out);
+            joint.upper = cfg.drawer_travel * depth;
+        }
+        JointKind::Revolute if is_rotary_knob(child_label) => {
+            joint.lower = -std::f32::consts::PI;
+            joint.upper = std::f32::consts::PI;
+        }
+        JointKind::Revolute => {
+            let (axis, pivot) = hinge(parent, child, out, handle);
+            joint.axis_world = axis;
+            joint.origin_world = pivot;
+            joint.upper = cfg.revolute_upper_rad;
+        }
+    }
+    joint
+}
+
+/// Full extent of a primitive along a world direction.
+fn extent_along(prim: &Primitive, dir: Vec3) -> f32 {
+    let axes = prim.axes_world();
+    (0..3).map(|k| axes[k].dot(dir).abs() * prim.size[k]).sum()
+}
+
+/// Hinge line of a door: direction (signed so a positive angle opens outward) and a pivot point.
+fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, handle: Option<Vec3>) -> (Vec3, Vec3) {
+    let axes = door.axes_world();
+    let half = door.size * 0.5;
+    let thick = (0..3).max_by(|&a, &b| axes[a].dot(out).abs().total_cmp(&axes[b].dot(out).abs())).unwrap_or(2);
+    let (i1, i2) = ((thick + 1) % 3, (thick + 2) % 3);
+    let c = door.center();
+    // Which in-plane axis carries the handle offset, and on which side.
+    let from_handle = handle.and_then(|h| {
+        let d = h - c;
+        let r1 = d.dot(axes[i1]) / half[i1].max(1e-3);
+        let r2 = d.dot(axes[i2]) / half[i2].max(1e-3);
+        if r1.abs().max(r2.abs()) < 0.1 {
+            return None; // centred handle: no cue
+        }
+        // The hinge runs along the other axis, on the edge away from the handle.
+        Some(if r1.abs() >= r2.abs() { (i2, i1, -r1.signum()) } else { (i1, i2, -r2.signum()) })
+    });
+    let (hinge_axis, across, side) = from_handle.unwrap_or_else(|| {
+        let vertical_out = out.dot(UP).abs() > 0.7;
+        let (h, a) = if vertical_out {
+            // A lid: hinge along its longer side, on the side towards the parent's centre.
+            if half[i1] >= half[i2] { (i1, i2) } else { (i2, i1) }
+        } else if axes[i1].dot(UP).abs() >= axes[i2].dot(UP).abs() {
+            (i1, i2) // a side door: vertical hinge
+        } else {
+            (i2, i1)
+        };
+        let towards_parent = (parent.center() - c).dot(axes[a]);
+        let side = if vertical_out {
+            if towards_parent >= 0.0 { 1.0 } else { -1.0 }
+        } else if towards_parent > 0.0 {
+            -1.0 // the outer edge, away from the parent's centre (double doors hinge outside)
+        } else {
+            1.0
+        };
+        (h, a, side)
+    });
+    let back = -out * (axes[thick].dot(out).abs() * half[thick]);
+    let pivot = c + axes[across] * (side * half[across]) + back;
+    let mut axis = axes[hinge_axis];
+    if axis.cross(c - pivot).dot(out) < 0.0 {
+        axis = -axis;
+    }
+    (axis, pivot)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(label: &str, expected: JointKind) {
+        assert_eq!(joint_kind_for_label(label), expected, "label {label:?}");
+    }
+
+    #[test]
+    fn labels_map_to_joint_types() {
+        check("drawer", JointKind::Prismatic);
+        check("Drawer_2", JointKind::Prismatic);
+        check("door", JointKind::Revolute);
+        check("door_handle", JointKind::Fixed);
+        check("lid", JointKind::Revolute);
+        check("knob", JointKind::Revolute);
+        check("button", JointKind::Prismatic);
+        check("leg", JointKind::Fixed);
+        check("glorp", JointKind::Fixed);
+    }
+
+    fn cabinet_body() -> Primitive {
+        Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.8, 0.5, 1.0))
+    }
+
+    #[test]
+    fn drawer_slides_out_of_the_front_about_its_depth() {
+        let drawer = Primitive::cuboid_at(Vec3::new(0.0, 0.26, 0.8), Vec3::new(0.6, 0.02, 0.2));
+        let j = estimate_joint(1, &cabinet_body(), 2, &drawer, "drawer", JointKind::Prismatic, None, &KinematicsConfig::default());
+        assert!(j.axis_world.dot(Vec3::Y) > 0.999, "{j:?}");
+        assert!((j.upper - 0.85 * 0.5).abs() < 1e-5);
+    }
+
+    #[test]
+    fn door_hinges_on_the_edge_away_from_its_handle_and_opens_outward() {
+        let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
+        let handle = Vec3::new(0.36, 0.29, 0.5); // near the door's +x edge
+        let j = estimate_joint(1, &cabinet_body(), 2, &door, "door", JointKind::Revolute, Some(handle), &KinematicsConfig::default());
+        assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "vertical hinge: {j:?}");
+        assert!((j.origin_world.x - 0.0).abs() < 1e-5, "hinge on the -x edge: {j:?}");
+        assert!((j.origin_world.y - 0.25).abs() < 1e-5, "at the back face: {j:?}");
+        // Opening by a small angle moves the door centre outward (+y).
+        let q = crate::math::Quat::from_axis_angle(j.axis_world, 0.3);
+        let moved = j.origin_world + q * (door.center() - j.origin_world);
+        assert!(moved.y > door.center().y);
+    }
+
+    #[test]
+    fn oven_door_with_handle_on_top_hinges_at_the_bottom() {
+        let door = Primitive::cuboid_at(Vec3::new(0.0, 0.26, 0.4), Vec3::new(0.7, 0.02, 0.5));
+        let handle = Vec3::new(0.0, 0.29, 0.6);
+        let j = estimate_joint(1, &cabinet_body(), 2, &door, "door", JointKind::Revolute, Some(handle), &KinematicsConfig::default());
+        assert!(j.axis_world.dot(Vec3::X).abs() > 0.999, "{j:?}");
+        assert!((j.origin_world.z - 0.15).abs() < 1e-5, "{j:?}");
+    }
+}

@@ -1,0 +1,241 @@
+//! The whole method, stage by stage: fit every part (parallel), then per object the contact
+//! graph, Edmonds' tree and the top-down refinement, then the scene graph (support, proximity,
+//! object poses), then joints from labels and the final geometry.
+//!
+//! Editor corrections are data ([`PinnedEdits`]) passed in, so re-running the pipeline keeps
+//! them and tests replay them without a GUI. [`assemble`] re-runs everything after fitting; it is
+//! what the editor calls on every edit.
+
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::fit::{FitConfig, fit_part};
+use crate::kinematics::{Joint, JointKind, KinematicsConfig, estimate_joint, joint_kind_for_label, label_tokens};
+use crate::math::Vec3;
+use crate::model::{ContactEdge, ObjectModel, PartModel, SceneModel};
+use crate::primitive::{Primitive, PrimitiveKind};
+use crate::refine::{RefineConfig, RefineStats, refine_object};
+use crate::report::Warning;
+use crate::scan::{ObjectId, PartId, Scan};
+use crate::scene::{SceneConfig, SceneObject, build_scene, estimate_floor};
+use crate::tree::{PartTree, TreeConfig, TreePart, build_part_tree};
+
+/// Every threshold of the method in one place.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PipelineConfig {
+    pub fit: FitConfig,
+    pub tree: TreeConfig,
+    pub refine: RefineConfig,
+    pub kinematics: KinematicsConfig,
+    pub scene: SceneConfig,
+}
+
+/// Corrections pinned by a person; every run of the pipeline honours them.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PinnedEdits {
+    /// child → parent.
+    pub parent: BTreeMap<PartId, PartId>,
+    pub joint_kind: BTreeMap<PartId, JointKind>,
+    pub primitive_kind: BTreeMap<PartId, PrimitiveKind>,
+    /// Joint axis (world), keyed by child part.
+    pub axis: BTreeMap<PartId, Vec3>,
+    /// Joint limits (lower, upper), keyed by child part.
+    pub limits: BTreeMap<PartId, (f32, f32)>,
+}
+
+/// Progress reporting for long stages (the CLI draws bars, the editor a spinner).
+pub trait Progress: Sync {
+    fn update(&self, stage: &str, done: usize, total: usize);
+}
+
+/// No progress reporting.
+pub struct Quiet;
+
+impl Progress for Quiet {
+    fn update(&self, _stage: &str, _done: usize, _total: usize) {}
+}
+
+/// Fitted parts before the relational stages (the expensive, cacheable half of the pipeline).
+#[derive(Clone, Debug, Default)]
+pub struct FittedParts {
+    pub parts: Vec<PartModel>,
+    pub warnings: Vec<Warning>,
+}
+
+/// Fits a primitive to every part, in parallel; parts that cannot be fitted are reported and
+/// left out.
+#[must_use]
+pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &dyn Progress) -> FittedParts {
+    let total = scan.parts.len();
+    let done = AtomicUsize::new(0);
+    let results: Vec<Result<PartModel, Warning>> = scan
+        .parts
+        .par_iter()
+        .map(|part| {
+            let r = fit_part(&part.points, cfg, edits.primitive_kind.get(&part.id).copied());
+            progress.update("fit", done.fetch_add(1, Ordering::Relaxed) + 1, total);
+            match r {
+                Ok(fit) => Ok(PartModel {
+                    id: part.id,
+                    object: part.object,
+                    label: part.label.clone(),
+                    primitive: fit.primitive,
+                    fit_error: fit.fit_error,
+                    point_count: part.points.len(),
+                }),
+                Err(e) => Err(Warning::new("fit", format!("part {}", part.id), format!("{e}; part left out"))),
+            }
+        })
+        .collect();
+    let mut out = FittedParts::default();
+    for r in results {
+        match r {
+            Ok(p) => out.parts.push(p),
+            Err(w) => out.warnings.push(w),
+        }
+    }
+    out
+}
+
+/// Runs the whole pipeline on a scan.
+#[must_use]
+pub fn reconstruct(scan: &Scan, cfg: &PipelineConfig, edits: &PinnedEdits, progress: &dyn Progress) -> SceneModel {
+    let fitted = fit_parts(scan, &cfg.fit, edits, progress);
+    let categories: BTreeMap<ObjectId, String> = scan.objects.iter().map(|(id, o)| (*id, o.category.clone())).collect();
+    let floor_hint = FloorHint::Points(&scan.background);
+    let mut scene = assemble(&fitted, &categories, floor_hint, cfg, edits).0;
+    scene.source.clone_from(&scan.source);
+    scene
+}
+
+/// Where the floor is: estimated from background points, or known.
+#[derive(Clone, Copy, Debug)]
+pub enum FloorHint<'a> {
+    Points(&'a [Vec3]),
+    Height(f32),
+}
+
+/// Everything after fitting: contact graph, tree, refinement, scene graph, joints.
+/// Returns the scene and what refinement changed.
+#[must_use]
+pub fn assemble(
+    fitted: &FittedParts,
+    categories: &BTreeMap<ObjectId, String>,
+    floor: FloorHint<'_>,
+    cfg: &PipelineConfig,
+    edits: &PinnedEdits,
+) -> (SceneModel, RefineStats) {
+    let mut warnings = fitted.warnings.clone();
+    let mut by_object: BTreeMap<ObjectId, Vec<&PartModel>> = BTreeMap::new();
+    for p in &fitted.parts {
+        by_object.entry(p.object).or_default().push(p);
+    }
+    // Per object: contact graph → tree → refinement (parallel over objects, in order).
+    let per_object: Vec<(ObjectId, PartTree, BTreeMap<PartId, Primitive>, RefineStats, Vec<Warning>)> = by_object
+        .par_iter()
+        .map(|(&obj, parts)| {
+            let view: Vec<TreePart> = parts.iter().map(|p| TreePart { id: p.id, label: &p.label, primitive: &p.primitive }).collect();
+            let (tree, w) = build_part_tree(&view, &cfg.tree, &edits.parent);
+            let mut prims: BTreeMap<PartId, Primitive> = parts.iter().map(|p| (p.id, p.primitive)).collect();
+            let stats = refine_object(&mut prims, &tree, &cfg.refine, &cfg.tree.contact);
+            (obj, tree, prims, stats, w)
+        })
+        .collect();
+    let mut stats = RefineStats::default();
+    let mut trees = BTreeMap::new();
+    let mut scene_objects = Vec::new();
+    let mut contact_edges: Vec<ContactEdge> = Vec::new();
+    for (obj, tree, prims, s, w) in per_object {
+        stats.merge(s);
+        warnings.extend(w);
+        contact_edges.extend(tree.edges.iter().copied());
+        scene_objects.push(SceneObject { id: obj, root_part: tree.root, parts: prims.into_iter().collect() });
+        trees.insert(obj, tree);
+    }
+    // Scene graph: floor, support, proximity, object poses.
+    let floor_z = match floor {
+        FloorHint::Points(points) => estimate_floor(points, &scene_objects),
+        FloorHint::Height(z) => z,
+    };
+    let (graph, w) = build_scene(&mut scene_objects, floor_z, &cfg.scene);
+    warnings.extend(w);
+    // Final geometry, then joints from it.
+    let mut final_prims: BTreeMap<PartId, Primitive> = BTreeMap::new();
+    for o in &scene_objects {
+        final_prims.extend(o.parts.iter().copied());
+    }
+    let labels: BTreeMap<PartId, &str> = fitted.parts.iter().map(|p| (p.id, p.label.as_str())).collect();
+    let mut joints = Vec::new();
+    for tree in trees.values() {
+        for (&child, &parent) in &tree.parent {
+            joints.push(make_joint(tree, parent, child, &final_prims, &labels, cfg, edits));
+        }
+    }
+    joints.sort_by_key(|j| j.child);
+    let mut parts: Vec<PartModel> = fitted
+        .parts
+        .iter()
+        .map(|p| PartModel { primitive: final_prims.get(&p.id).copied().unwrap_or(p.primitive), ..p.clone() })
+        .collect();
+    parts.sort_by_key(|p| p.id);
+    let objects = scene_objects
+        .iter()
+        .map(|o| ObjectModel {
+            id: o.id,
+            category: categories.get(&o.id).cloned().unwrap_or_else(|| "object".to_owned()),
+            root_part: o.root_part,
+            supported_by_part: graph.support.get(&o.id).copied().flatten(),
+        })
+        .collect();
+    contact_edges.sort_by_key(|e| (e.parent, e.child));
+    let scene = SceneModel {
+        source: String::new(),
+        parts,
+        joints,
+        contact_edges,
+        objects,
+        relations: graph.relations,
+        floor_z,
+        warnings,
+    };
+    (scene, stats)
+}
+
+fn is_handle(label: &str) -> bool {
+    label_tokens(label).any(|t| matches!(t.as_str(), "handle" | "handles" | "pull" | "grip" | "bar" | "knob"))
+}
+
+fn make_joint(
+    tree: &PartTree,
+    parent: PartId,
+    child: PartId,
+    prims: &BTreeMap<PartId, Primitive>,
+    labels: &BTreeMap<PartId, &str>,
+    cfg: &PipelineConfig,
+    edits: &PinnedEdits,
+) -> Joint {
+    let label = labels.get(&child).copied().unwrap_or("");
+    let kind = edits.joint_kind.get(&child).copied().unwrap_or_else(|| joint_kind_for_label(label));
+    // A handle mounted on the child tells the front and the side that opens.
+    let handle = tree
+        .children(child)
+        .into_iter()
+        .find(|c| labels.get(c).is_some_and(|l| is_handle(l)))
+        .and_then(|c| prims.get(&c))
+        .map(Primitive::center);
+    let (Some(pp), Some(cp)) = (prims.get(&parent), prims.get(&child)) else {
+        return Joint { parent, child, kind: JointKind::Fixed, axis_world: Vec3::X, origin_world: Vec3::ZERO, lower: 0.0, upper: 0.0 };
+    };
+    let mut joint = estimate_joint(parent, pp, child, cp, label, kind, handle, &cfg.kinematics);
+    if let Some(axis) = edits.axis.get(&child) {
+        joint.axis_world = axis.normalize_or(joint.axis_world);
+    }
+    if let Some(&(lo, hi)) = edits.limits.get(&child) {
+        joint.lower = lo;
+        joint.upper = hi;
+    }
+    joint
+}

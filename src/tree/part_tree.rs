@@ -1,0 +1,214 @@
+//! The per-object part-level parse tree (paper eq. 3): candidate edges from the contact test,
+//! then Edmonds' maximum arborescence.
+//!
+//! A virtual root joins the graph with tiny-weight edges to every part, so the arborescence
+//! always exists and Edmonds itself chooses the object's root (the part whose parenting costs
+//! least); among otherwise equal choices, parts labelled as a base (body, base, frame, top) and
+//! then larger parts are preferred. A part with no contact at all is attached to its nearest part
+//! by a fallback edge far lighter than any contact, and reported.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use super::arborescence::{WeightedEdge, max_arborescence};
+use crate::contact::{ContactConfig, PairContact, contact};
+use crate::model::ContactEdge;
+use crate::primitive::Primitive;
+use crate::report::Warning;
+use crate::scan::PartId;
+
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
+pub struct TreeConfig {
+    pub contact: ContactConfig,
+}
+
+/// One object's tree.
+#[derive(Clone, Debug, Default)]
+pub struct PartTree {
+    pub root: PartId,
+    /// child → parent.
+    pub parent: BTreeMap<PartId, PartId>,
+    /// Candidate contact edges (the directed graph), sorted by (parent, child).
+    pub edges: Vec<ContactEdge>,
+    /// The contact behind each candidate edge, by (parent, child).
+    pub contacts: BTreeMap<(PartId, PartId), PairContact>,
+}
+
+impl PartTree {
+    /// Children of a part, sorted.
+    #[must_use]
+    pub fn children(&self, part: PartId) -> Vec<PartId> {
+        self.parent.iter().filter(|(_, p)| **p == part).map(|(c, _)| *c).collect()
+    }
+
+    /// Parts top-down (breadth first from the root, children in id order).
+    #[must_use]
+    pub fn top_down(&self) -> Vec<PartId> {
+        let mut order = vec![self.root];
+        let mut i = 0;
+        while i < order.len() {
+            order.extend(self.children(order[i]));
+            i += 1;
+        }
+        order
+    }
+}
+
+/// One part as the tree builder sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct TreePart<'a> {
+    pub id: PartId,
+    pub label: &'a str,
+    pub primitive: &'a Primitive,
+}
+
+fn is_base_label(label: &str) -> bool {
+    crate::kinematics::label_tokens(label).any(|t| matches!(t.as_str(), "body" | "base" | "frame" | "top" | "carcass" | "cabinet"))
+}
+
+const ROOT_WEIGHT: f64 = 1e-6;
+const FALLBACK_WEIGHT: f64 = 1e-4;
+const FORCED_WEIGHT: f64 = 1e3;
+
+/// Builds the tree of one object's parts (`parts` sorted by id). `forced_parent` pins
+/// child → parent edges (editor corrections); a pin naming a part outside `parts` is ignored
+/// with a warning.
+#[must_use]
+pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: &BTreeMap<PartId, PartId>) -> (PartTree, Vec<Warning>) {
+    let mut warnings = Vec::new();
+    let n = parts.len();
+    if n == 0 {
+        return (PartTree::default(), warnings);
+    }
+    let index: BTreeMap<PartId, usize> = parts.iter().enumerate().map(|(i, p)| (p.id, i)).collect();
+    // Contacts for every ordered pair.
+    let mut contacts = BTreeMap::new();
+    for p in parts {
+        for c in parts {
+            if p.id == c.id {
+                continue;
+            }
+            if let Some(pc) = contact(p.primitive, c.primitive, &cfg.contact) {
+                contacts.insert((p.id, c.id), pc);
+            }
+        }
+    }
+    // Root preference: base labels first, then volume (rank keeps weights tiny and ordered).
+    let mut by_pref: Vec<usize> = (0..n).collect();
+    by_pref.sort_by(|&a, &b| {
+        let ka = (is_base_label(parts[a].label), parts[a].primitive.volume());
+        let kb = (is_base_label(parts[b].label), parts[b].primitive.volume());
+        ka.partial_cmp(&kb).unwrap_or(std::cmp::Ordering::Equal).then(parts[b].id.cmp(&parts[a].id))
+    });
+    let mut edges = Vec::new();
+    let mut edge_pairs = Vec::new();
+    for (rank, &i) in by_pref.iter().enumerate() {
+        edges.push(WeightedEdge { from: 0, to: i + 1, weight: ROOT_WEIGHT * (1.0 + rank as f64) / n as f64 });
+        edge_pairs.push(None);
+    }
+    let mut forced: BTreeMap<usize, usize> = BTreeMap::new();
+    for (child, parent) in forced_parent {
+        match (index.get(child), index.get(parent)) {
+            (Some(&c), Some(&p)) if c != p => {
+                forced.insert(c, p);
+            }
+            (Some(_), _) => warnings.push(Warning::new("tree", format!("part {child}"), format!("pinned parent {parent} is not a part of the same object; pin ignored"))),
+            _ => {}
+        }
+    }
+    for (ci, c) in parts.iter().enumerate() {
+        if let Some(&pi) = forced.get(&ci) {
+            edges.push(WeightedEdge { from: pi + 1, to: ci + 1, weight: FORCED_WEIGHT });
+            edge_pairs.push(Some((parts[pi].id, c.id)));
+            continue;
+        }
+        for (pi, p) in parts.iter().enumerate() {
+            if pi == ci {
+                continue;
+            }
+            let weight = match contacts.get(&(p.id, c.id)) {
+                Some(pc) => f64::from(pc.weight),
+                None => FALLBACK_WEIGHT / (1.0 + f64::from(primitive_gap(p.primitive, c.primitive))),
+            };
+            edges.push(WeightedEdge { from: pi + 1, to: ci + 1, weight });
+            edge_pairs.push(Some((p.id, c.id)));
+        }
+    }
+    let Some(chosen) = max_arborescence(n + 1, 0, &edges) else {
+        // Cannot happen: the virtual root reaches every node. Keep a flat tree anyway.
+        warnings.push(Warning::new("tree", "object", "no spanning tree; parts left flat"));
+        return (PartTree { root: parts[0].id, ..PartTree::default() }, warnings);
+    };
+    let mut parent = BTreeMap::new();
+    let mut roots = Vec::new();
+    for k in chosen {
+        match edge_pairs[k] {
+            Some((p, c)) => {
+                if !contacts.contains_key(&(p, c)) && !forced_parent.contains_key(&c) {
+                    warnings.push(Warning::new("tree", format!("part {c}"), format!("touches no other part; attached to the nearest part {p} by a fixed joint")));
+                }
+                parent.insert(c, p);
+            }
+            None => roots.push(parts[edges[k].to - 1].id),
+        }
+    }
+    // Several roots happen only when the pins disconnect the graph: hang the others off the first.
+    roots.sort_unstable();
+    let root = roots.first().copied().unwrap_or(parts[0].id);
+    for r in roots.iter().skip(1) {
+        warnings.push(Warning::new("tree", format!("part {r}"), format!("separate component; attached to root {root}")));
+        parent.insert(*r, root);
+    }
+    let tree_edges: Vec<ContactEdge> = contacts
+        .iter()
+        .map(|(&(p, c), pc)| ContactEdge { parent: p, child: c, weight: pc.weight, in_tree: parent.get(&c) == Some(&p) })
+        .collect();
+    (PartTree { root, parent, edges: tree_edges, contacts }, warnings)
+}
+
+/// Distance between the bounding boxes of two primitives (0 when they overlap).
+fn primitive_gap(a: &Primitive, b: &Primitive) -> f32 {
+    let (alo, ahi) = a.aabb();
+    let (blo, bhi) = b.aabb();
+    (blo - ahi).max(alo - bhi).max(crate::math::Vec3::ZERO).length()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+
+    fn table() -> Vec<(PartId, &'static str, Primitive)> {
+        let mut parts = vec![(1, "top", Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.73), Vec3::new(1.2, 0.8, 0.04)))];
+        for (k, (x, y)) in [(-0.55, -0.35), (0.55, -0.35), (-0.55, 0.35), (0.55, 0.35)].into_iter().enumerate() {
+            parts.push((2 + k as PartId, "leg", Primitive::cuboid_at(Vec3::new(x, y, 0.355), Vec3::new(0.05, 0.05, 0.71))));
+        }
+        parts
+    }
+
+    #[test]
+    fn table_legs_hang_off_the_top() {
+        let parts = table();
+        let view: Vec<TreePart> = parts.iter().map(|(id, l, p)| TreePart { id: *id, label: l, primitive: p }).collect();
+        let (tree, warnings) = build_part_tree(&view, &TreeConfig::default(), &BTreeMap::new());
+        assert!(warnings.is_empty(), "{warnings:?}");
+        assert_eq!(tree.root, 1);
+        for leg in 2..=5 {
+            assert_eq!(tree.parent.get(&leg), Some(&1));
+        }
+        assert_eq!(tree.top_down(), vec![1, 2, 3, 4, 5]);
+    }
+
+    #[test]
+    fn pinned_parent_wins_and_isolated_part_is_reported() {
+        let mut parts = table();
+        parts.push((9, "handle", Primitive::cuboid_at(Vec3::new(3.0, 0.0, 0.5), Vec3::splat(0.05))));
+        let view: Vec<TreePart> = parts.iter().map(|(id, l, p)| TreePart { id: *id, label: l, primitive: p }).collect();
+        let pins = BTreeMap::from([(3, 2)]);
+        let (tree, warnings) = build_part_tree(&view, &TreeConfig::default(), &pins);
+        assert_eq!(tree.parent.get(&3), Some(&2));
+        assert!(tree.parent.contains_key(&9));
+        assert!(warnings.iter().any(|w| w.subject == "part 9"), "{warnings:?}");
+    }
+}
