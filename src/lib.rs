@@ -6,6 +6,7 @@
 
 pub mod contact;
 pub mod export;
+pub mod io;
 pub mod kinematics;
 pub mod math;
 pub mod model;

@@ -5,6 +5,21 @@ use std::collections::BTreeMap;
 
 use crate::math::Vec3;
 
+mod error;
+mod labels;
+mod ply;
+mod read;
+#[cfg(test)]
+// Tests: a failed unwrap is the failure report.
+#[allow(clippy::unwrap_used)]
+mod tests;
+mod write;
+
+pub use error::ScanError;
+pub use labels::labels_json;
+pub use read::{UNASSIGNED, UNKNOWN_CATEGORY, UNKNOWN_LABEL, read_scan, read_scan_bytes};
+pub use write::{scan_to_ply_bytes, write_scan};
+
 /// A part instance id as written in the scan (`part` property); unique in the file.
 pub type PartId = i64;
 /// An object instance id (`object` property).
@@ -23,12 +38,15 @@ pub struct Scan {
     pub background: Vec<Vec3>,
 }
 
+/// An object instance and its category (from the labels `objects` map).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ScanObject {
     pub id: ObjectId,
+    /// `cabinet`, `chair`, ...; "object" when the labels do not say.
     pub category: String,
 }
 
+/// The points of one part instance.
 #[derive(Clone, Debug)]
 pub struct ScanPart {
     pub id: PartId,
@@ -41,16 +59,19 @@ pub struct ScanPart {
 }
 
 impl Scan {
+    /// All points: parts and background.
     #[must_use]
     pub fn point_count(&self) -> usize {
         self.background.len() + self.parts.iter().map(|p| p.points.len()).sum::<usize>()
     }
 
+    /// The part with this id (parts are sorted by id).
     #[must_use]
     pub fn part(&self, id: PartId) -> Option<&ScanPart> {
         self.parts.binary_search_by_key(&id, |p| p.id).ok().map(|i| &self.parts[i])
     }
 
+    /// The object's category, "object" when unknown.
     #[must_use]
     pub fn category(&self, object: ObjectId) -> &str {
         self.objects.get(&object).map_or("object", |o| o.category.as_str())

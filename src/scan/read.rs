@@ -1,0 +1,279 @@
+//! Reading a scan: the PLY's vertices grouped by part, with the labels JSON beside it.
+
+use std::collections::{BTreeMap, HashMap};
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::error::ScanError;
+use super::labels::{Labels, parse_labels};
+use super::ply::{RawVertex, read_vertices};
+use super::{ObjectId, PartId, Scan, ScanObject, ScanPart};
+use crate::math::Vec3;
+use crate::report::Warning;
+
+/// The part (and object) id of points with no part: background, floor, walls, clutter.
+pub const UNASSIGNED: i64 = -1;
+
+/// Label of a part the labels file does not name.
+pub const UNKNOWN_LABEL: &str = "unknown";
+
+/// Category of an object the labels file does not name.
+pub const UNKNOWN_CATEGORY: &str = "object";
+
+/// Reads `NAME.ply` and the labels `NAME.json` beside it (see `read_scan_bytes` for the rules).
+/// A missing labels file is a warning, not an error.
+pub fn read_scan(ply_path: &Path) -> Result<(Scan, Vec<Warning>), ScanError> {
+    let ply = crate::io::read_bytes(ply_path)?;
+    let labels_path = ply_path.with_extension("json");
+    let labels = crate::io::read_optional_string(&labels_path)?;
+    read_scan_bytes(
+        &ply,
+        &ply_path.display().to_string(),
+        labels.as_deref(),
+        &labels_path.display().to_string(),
+    )
+}
+
+/// Reads a scan from memory: `ply` is the PLY file, `labels_json` the labels file (`None` when it
+/// does not exist); the names are used in errors, warnings and `Scan::source`.
+///
+/// Points with part -1 (or any negative part id, with a warning) go to `background`; parts are sorted by id. A part's object is the labels'
+/// `object` if given, else the majority `object` value of its points (a warning when they
+/// disagree); a part whose object is -1 is reported and its points go to the background. Parts
+/// without a label get "unknown", objects without a category "object" (each with a warning).
+pub fn read_scan_bytes(
+    ply: &[u8],
+    ply_name: &str,
+    labels_json: Option<&str>,
+    labels_name: &str,
+) -> Result<(Scan, Vec<Warning>), ScanError> {
+    let mut warnings = Vec::new();
+    let ply_data = read_vertices(ply, ply_name, &mut warnings)?;
+    let labels = if let Some(text) = labels_json {
+        Some(parse_labels(text, labels_name)?)
+    } else {
+        warnings.push(Warning::new(
+            "scan",
+            labels_name,
+            "labels file not found: every part is labelled \"unknown\" and every object \"object\"",
+        ));
+        None
+    };
+    let mut groups =
+        group_by_part(&ply_data.vertices, ply_data.has_normals, &mut warnings, ply_name);
+    if let Some(labels) = &labels
+        && let Some(&part) = labels
+            .parts
+            .keys()
+            .find(|&&id| groups.parts.binary_search_by_key(&id, |g| g.id).is_err())
+    {
+        return Err(ScanError::UnknownLabelPart {
+            file: labels_name.to_owned(),
+            part,
+            ply: ply_name.to_owned(),
+        });
+    }
+
+    let mut scan = Scan { source: ply_name.to_owned(), ..Scan::default() };
+    scan.background = std::mem::take(&mut groups.background);
+    for group in groups.parts.drain(..) {
+        let Some(part) = build_part(group, labels.as_ref(), &mut warnings, &mut scan.background)
+        else {
+            continue;
+        };
+        scan.objects.entry(part.object).or_insert_with(|| ScanObject {
+            id: part.object,
+            category: object_category(part.object, labels.as_ref(), &mut warnings),
+        });
+        scan.parts.push(part);
+    }
+    if scan.parts.is_empty() {
+        warnings.push(Warning::new(
+            "scan",
+            ply_name,
+            "the scan has no parts: every point is background",
+        ));
+    }
+    Ok((scan, warnings))
+}
+
+/// The points of one part id as read, before labels are applied.
+struct PartGroup {
+    id: PartId,
+    points: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    /// (object id, point count), in order of first appearance.
+    object_votes: Vec<(ObjectId, usize)>,
+}
+
+struct Groups {
+    /// Sorted by id.
+    parts: Vec<PartGroup>,
+    background: Vec<Vec3>,
+}
+
+fn group_by_part(
+    vertices: &[RawVertex],
+    has_normals: bool,
+    warnings: &mut Vec<Warning>,
+    ply_name: &str,
+) -> Groups {
+    let mut parts: Vec<PartGroup> = Vec::new();
+    let mut index_of: HashMap<PartId, usize> = HashMap::new();
+    let mut background = Vec::new();
+    let mut other_negative: BTreeMap<PartId, usize> = BTreeMap::new();
+    // Scans usually store a part's points together: remember the last part looked up.
+    let mut last: Option<(PartId, usize)> = None;
+    for v in vertices {
+        let point = Vec3::from_array(v.position);
+        if v.part < 0 {
+            if v.part != UNASSIGNED {
+                *other_negative.entry(v.part).or_default() += 1;
+            }
+            background.push(point);
+            continue;
+        }
+        let index = match last {
+            Some((id, i)) if id == v.part => i,
+            _ => {
+                let i = *index_of.entry(v.part).or_insert_with(|| {
+                    parts.push(PartGroup {
+                        id: v.part,
+                        points: Vec::new(),
+                        normals: Vec::new(),
+                        object_votes: Vec::new(),
+                    });
+                    parts.len() - 1
+                });
+                last = Some((v.part, i));
+                i
+            }
+        };
+        let group = &mut parts[index];
+        group.points.push(point);
+        if has_normals {
+            group.normals.push(Vec3::from_array(v.normal));
+        }
+        match group.object_votes.iter_mut().find(|(o, _)| *o == v.object) {
+            Some((_, n)) => *n += 1,
+            None => group.object_votes.push((v.object, 1)),
+        }
+    }
+    if !other_negative.is_empty() {
+        let mut list = String::new();
+        for (id, n) in &other_negative {
+            let _ = write!(list, "{}{id} ({n} points)", if list.is_empty() { "" } else { ", " });
+        }
+        warnings.push(Warning::new(
+            "scan",
+            ply_name,
+            format!("negative part ids other than -1 treated as background: {list}"),
+        ));
+    }
+    // Part ids are unique, so an unstable sort is deterministic.
+    parts.sort_unstable_by_key(|p| p.id);
+    Groups { parts, background }
+}
+
+fn describe_votes(votes: &[(ObjectId, usize)]) -> String {
+    votes.iter().map(|(o, n)| format!("{o} ({n} points)")).collect::<Vec<_>>().join(", ")
+}
+
+/// Applies the labels to one part; `None` (points moved to `background`) when its object is -1.
+fn build_part(
+    mut group: PartGroup,
+    labels: Option<&Labels>,
+    warnings: &mut Vec<Warning>,
+    background: &mut Vec<Vec3>,
+) -> Option<ScanPart> {
+    let subject = format!("part {}", group.id);
+    // Majority object of the points; ties go to an assigned id, then the smallest.
+    group.object_votes.sort_by_key(|&(o, n)| (std::cmp::Reverse(n), o == UNASSIGNED, o));
+    let majority = group.object_votes.first().map_or(UNASSIGNED, |&(o, _)| o);
+    let entry = labels.and_then(|l| l.parts.get(&group.id));
+    let object = if let Some(labelled) = entry.and_then(|e| e.object) {
+        if group.object_votes.iter().any(|&(o, _)| o != labelled) {
+            warnings.push(Warning::new(
+                "scan",
+                subject.as_str(),
+                format!(
+                    "the labels say object {labelled}, its points say {}; using {labelled}",
+                    describe_votes(&group.object_votes)
+                ),
+            ));
+        }
+        labelled
+    } else {
+        if group.object_votes.len() > 1 {
+            warnings.push(Warning::new(
+                "scan",
+                subject.as_str(),
+                format!(
+                    "its points disagree on the object: {}; using the majority, {majority}",
+                    describe_votes(&group.object_votes)
+                ),
+            ));
+        }
+        majority
+    };
+    if object < 0 {
+        warnings.push(Warning::new(
+            "scan",
+            subject,
+            format!(
+                "belongs to object {object} (unassigned): its {} points are treated as background",
+                group.points.len()
+            ),
+        ));
+        background.append(&mut group.points);
+        return None;
+    }
+    let labelled = entry.and_then(|e| e.label.as_deref()).filter(|l| !l.trim().is_empty());
+    let label = if let Some(l) = labelled {
+        l.to_owned()
+    } else {
+        if labels.is_some() {
+            warnings.push(Warning::new(
+                "scan",
+                subject.as_str(),
+                "no label in the labels file: using \"unknown\"",
+            ));
+        }
+        UNKNOWN_LABEL.to_owned()
+    };
+    let normals = if group.normals.is_empty() {
+        None
+    } else if let Some(bad) = group.normals.iter().position(|n| !n.is_finite()) {
+        warnings.push(Warning::new(
+            "scan",
+            subject,
+            format!("normal {bad} is not finite: the part's normals are dropped"),
+        ));
+        None
+    } else {
+        Some(group.normals)
+    };
+    Some(ScanPart { id: group.id, object, label, points: group.points, normals })
+}
+
+fn object_category(
+    object: ObjectId,
+    labels: Option<&Labels>,
+    warnings: &mut Vec<Warning>,
+) -> String {
+    match labels.and_then(|l| l.objects.get(&object)) {
+        Some(Some(category)) if !category.trim().is_empty() => category.clone(),
+        found => {
+            if labels.is_some() {
+                let why =
+                    if found.is_some() { "has no category" } else { "is not in the labels file" };
+                warnings.push(Warning::new(
+                    "scan",
+                    format!("object {object}"),
+                    format!("{why}: using \"{UNKNOWN_CATEGORY}\""),
+                ));
+            }
+            UNKNOWN_CATEGORY.to_owned()
+        }
+    }
+}
