@@ -7,6 +7,7 @@
 pub mod contact;
 pub mod export;
 pub mod io;
+pub mod eval;
 pub mod kinematics;
 pub mod math;
 pub mod model;

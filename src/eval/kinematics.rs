@@ -1,0 +1,137 @@
+//! Kinematic metrics: the paper's kinematic-edge AP (Table II) and joint type / axis accuracy.
+
+use std::collections::BTreeSet;
+
+use serde::{Deserialize, Serialize};
+
+use crate::kinematics::JointKind;
+use crate::math::{line_angle_deg, line_line_distance};
+use crate::model::SceneModel;
+use crate::scan::PartId;
+use crate::truth::TruthObject;
+
+/// Non-interpolated average precision of a ranked list: `Σ_k (R_k − R_{k−1}) · P_k`, where
+/// `ranked_hits[k]` says whether the k-th prediction (best first) is a true positive and recall
+/// counts all `truth_count` truth items, so missed items lower the AP. `None` when there is no
+/// truth item; 0 when nothing is predicted.
+#[must_use]
+pub fn average_precision(ranked_hits: &[bool], truth_count: usize) -> Option<f32> {
+    if truth_count == 0 {
+        return None;
+    }
+    let mut true_positives = 0_usize;
+    let mut ap = 0.0_f64;
+    for (k, hit) in ranked_hits.iter().enumerate() {
+        if *hit && true_positives < truth_count {
+            true_positives += 1;
+            let precision = true_positives as f64 / (k + 1) as f64;
+            ap += precision / truth_count as f64;
+        }
+    }
+    Some(ap as f32)
+}
+
+/// An undirected edge with the smaller id first.
+fn undirected(a: PartId, b: PartId) -> [PartId; 2] {
+    if a <= b { [a, b] } else { [b, a] }
+}
+
+/// Kinematic-edge AP of one object: the model's tree edges between parts of the object, ranked by
+/// the contact weight of that parent → child pair (0 if the model lists no such contact edge),
+/// against the truth's undirected contact edges. Returns (AP, number of predicted edges).
+pub(crate) fn edge_ap(model: &SceneModel, truth: &TruthObject, model_parts: &BTreeSet<PartId>) -> (Option<f32>, usize) {
+    let truth_edges: BTreeSet<[PartId; 2]> = truth.contact_edges.iter().map(|e| undirected(e[0], e[1])).collect();
+    // (weight, edge); duplicates of one undirected edge keep their best weight.
+    let mut predicted: Vec<(f32, [PartId; 2])> = Vec::new();
+    for joint in &model.joints {
+        if !(model_parts.contains(&joint.parent) && model_parts.contains(&joint.child)) {
+            continue;
+        }
+        let weight = model
+            .contact_edges
+            .iter()
+            .find(|c| c.parent == joint.parent && c.child == joint.child)
+            .map_or(0.0, |c| if c.weight.is_finite() { c.weight } else { 0.0 });
+        let edge = undirected(joint.parent, joint.child);
+        match predicted.iter_mut().find(|(_, e)| *e == edge) {
+            Some(entry) => entry.0 = entry.0.max(weight),
+            None => predicted.push((weight, edge)),
+        }
+    }
+    // Best first; ties broken by edge id so the ranking is deterministic.
+    predicted.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let hits: Vec<bool> = predicted.iter().map(|(_, e)| truth_edges.contains(e)).collect();
+    (average_precision(&hits, truth_edges.len()), predicted.len())
+}
+
+/// How one truth joint was reconstructed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointRow {
+    /// The truth joint's child part.
+    pub child: PartId,
+    pub truth_kind: JointKind,
+    /// The type of the model's joint with this child; `None` when the part is missing from the
+    /// model or is a root there.
+    pub predicted_kind: Option<JointKind>,
+    /// The child part is not in the model at all.
+    pub part_missing: bool,
+    pub type_correct: bool,
+    /// Undirected angle between the axes, degrees: movable truth joints with the right type only.
+    pub axis_error_deg: Option<f32>,
+    /// Distance between the hinge lines, metres: revolute joints with the right type only.
+    pub hinge_distance_m: Option<f32>,
+}
+
+/// Compares every truth joint of an object with the model's joint of the same child part.
+pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRow> {
+    truth
+        .joints
+        .iter()
+        .map(|t| {
+            let part_missing = model.part(t.child).is_none();
+            let predicted = if part_missing { None } else { model.joint_of(t.child) };
+            let predicted_kind = predicted.map(|j| j.kind);
+            let type_correct = predicted_kind == Some(t.kind);
+            let (mut axis_error_deg, mut hinge_distance_m) = (None, None);
+            if let Some(p) = predicted.filter(|_| type_correct && t.kind.is_movable()) {
+                axis_error_deg = Some(line_angle_deg(p.axis_world, t.axis_world));
+                if t.kind == JointKind::Revolute {
+                    hinge_distance_m =
+                        Some(line_line_distance(p.origin_world, p.axis_world, t.origin_world, t.axis_world));
+                }
+            }
+            JointRow {
+                child: t.child,
+                truth_kind: t.kind,
+                predicted_kind,
+                part_missing,
+                type_correct,
+                axis_error_deg,
+                hinge_distance_m,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ap_of_a_perfect_ranking_is_one() {
+        assert_eq!(average_precision(&[true, true, true], 3), Some(1.0));
+    }
+
+    #[test]
+    fn ap_of_a_mixed_ranking_matches_the_hand_computed_value() {
+        // Truth {A, B, C}; ranking A ✓, X ✗, B ✓, Y ✗; C never predicted.
+        // AP = 1/3 · 1/1 + 1/3 · 2/3 = 5/9.
+        let ap = average_precision(&[true, false, true, false], 3).expect("ap");
+        assert!((ap - 5.0 / 9.0).abs() < 1e-6, "{ap}");
+        // False positives after the last hit do not matter; before the first they do.
+        let ap = average_precision(&[false, true, true], 2).expect("ap");
+        assert!((ap - (0.5 * 0.5 + 0.5 * 2.0 / 3.0)).abs() < 1e-6, "{ap}");
+        assert_eq!(average_precision(&[], 2), Some(0.0));
+        assert_eq!(average_precision(&[true], 0), None);
+    }
+}
