@@ -7,6 +7,7 @@
 //! matched by id. Every truth object gets one row; model objects the truth does not know are listed
 //! in the summary.
 
+mod aggregate;
 pub mod baseline;
 pub mod geometry;
 pub mod kinematics;
@@ -17,6 +18,7 @@ use std::fmt::{self, Write as _};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+pub use aggregate::{Aggregate, BaselineMetrics, aggregate, evaluate_baseline};
 pub use baseline::object_level_baseline;
 pub use geometry::{GeometryScore, GeometrySummary, chamfer_distance, evaluate_geometry, sample_shapes, voxel_iou};
 pub use kinematics::{JointRow, average_precision};
@@ -181,7 +183,7 @@ fn summarise(objects: &[ObjectRow], unmatched_model_objects: Vec<ObjectId>) -> S
 }
 
 /// Median of the finite values (mean of the middle two for an even count); `None` if empty.
-fn median(values: &[f32]) -> Option<f32> {
+pub(crate) fn median(values: &[f32]) -> Option<f32> {
     let mut v: Vec<f32> = values.iter().copied().filter(|x| x.is_finite()).collect();
     if v.is_empty() {
         return None;
