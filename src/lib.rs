@@ -10,4 +10,5 @@ pub mod model;
 pub mod primitive;
 pub mod report;
 pub mod scan;
+pub mod synth;
 pub mod truth;
