@@ -18,4 +18,5 @@ pub mod report;
 pub mod scan;
 pub mod scene;
 pub mod tree;
+pub mod synth;
 pub mod truth;
