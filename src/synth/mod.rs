@@ -31,6 +31,15 @@ pub fn demo(seed: u64) -> (GroundTruth, Scan) {
     (truth, scan)
 }
 
+/// The demo scene scanned with the clean complete setting (the paper's *annotation* input).
+#[must_use]
+pub fn demo_clean(seed: u64) -> (GroundTruth, Scan) {
+    let truth = demo_room(seed);
+    let mut scan = scan(&truth, &ScannerConfig::clean_complete(), seed);
+    scan.source = format!("demo seed {seed} (clean complete)");
+    (truth, scan)
+}
+
 /// Colour of background points (floor, walls) for writers and viewers.
 pub const BACKGROUND_RGB: [u8; 3] = [190, 186, 178];
 
