@@ -6,6 +6,7 @@
 
 pub mod contact;
 pub mod export;
+pub mod fit;
 pub mod io;
 pub mod eval;
 pub mod kinematics;

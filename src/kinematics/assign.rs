@@ -76,14 +76,16 @@ pub fn outward_direction(parent: &Primitive, child: &Primitive, handle: Option<V
     let axes = parent.axes_world();
     let half = parent.size * 0.5;
     let offset = child.center() - parent.center();
-    let handle_dir = handle.map(|h| (h - child.center()).normalize_or_zero());
     let mut best = (f32::NEG_INFINITY, axes[0]);
     for (k, axis) in axes.iter().enumerate() {
         for side in [1.0_f32, -1.0] {
             let n = *axis * side;
             let mut score = offset.dot(n) / half[k].max(1e-3);
-            if let Some(d) = handle_dir {
-                score += 0.5 * d.dot(n);
+            if let Some(h) = handle {
+                // A handle stands proud of the child's front face: its offset along n, measured
+                // against the child's own half thickness along n (noise-sized offsets count little).
+                let reach = 0.5 * extent_along(child, n) + 0.01;
+                score += 0.5 * ((h - child.center()).dot(n) / reach).clamp(-1.0, 1.0);
             }
             if score > best.0 + 1e-6 {
                 best = (score, n);

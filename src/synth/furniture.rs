@@ -250,7 +250,7 @@ pub fn microwave(rng: &mut SynthRng) -> Furniture {
     for i in 0..knobs {
         let z = height * if knobs == 1 { 0.5 } else { [0.68, 0.32][i] };
         let knob = cylinder_along(Vec3::Y, Vec3::new(knob_x, front_y + 0.5 * knob_h, z), knob_d, knob_h);
-        f.add_fixed(body, "knob", knob);
+        f.add_revolute(body, "knob", knob, Vec3::Y, knob.center(), std::f32::consts::TAU);
     }
     f.centred()
 }
