@@ -24,6 +24,9 @@ pub struct SceneModel {
     /// Floor height (z), metres.
     pub floor_z: f32,
     pub warnings: Vec<Warning>,
+    /// Parts of the input scan that could not be fitted (reported in `warnings`), sorted.
+    #[serde(default)]
+    pub skipped_parts: Vec<PartId>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]

@@ -62,6 +62,8 @@ impl Progress for Quiet {
 #[derive(Clone, Debug, Default)]
 pub struct FittedParts {
     pub parts: Vec<PartModel>,
+    /// Parts that could not be fitted (each also has a warning).
+    pub skipped: Vec<PartId>,
     pub warnings: Vec<Warning>,
 }
 
@@ -71,11 +73,12 @@ pub struct FittedParts {
 pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &dyn Progress) -> FittedParts {
     let total = scan.parts.len();
     let done = AtomicUsize::new(0);
-    let results: Vec<Result<PartModel, Warning>> = scan
+    let results: Vec<Result<PartModel, (PartId, Warning)>> = scan
         .parts
         .par_iter()
         .map(|part| {
-            let r = fit_part(&part.points, cfg, edits.primitive_kind.get(&part.id).copied());
+            let forced = edits.primitive_kind.get(&part.id).copied();
+            let r = fit_part(&part.points, cfg, forced).map(|fit| if forced.is_none() { prefer_box_for_boards(&part.label, &part.points, fit) } else { fit });
             progress.update("fit", done.fetch_add(1, Ordering::Relaxed) + 1, total);
             match r {
                 Ok(fit) => Ok(PartModel {
@@ -86,7 +89,7 @@ pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &d
                     fit_error: fit.fit_error,
                     point_count: part.points.len(),
                 }),
-                Err(e) => Err(Warning::new("fit", format!("part {}", part.id), format!("{e}; part left out"))),
+                Err(e) => Err((part.id, Warning::new("fit", format!("part {}", part.id), format!("{e}; part left out")))),
             }
         })
         .collect();
@@ -94,7 +97,10 @@ pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &d
     for r in results {
         match r {
             Ok(p) => out.parts.push(p),
-            Err(w) => out.warnings.push(w),
+            Err((id, w)) => {
+                out.skipped.push(id);
+                out.warnings.push(w);
+            }
         }
     }
     coalign_parts(scan, &mut out.parts, edits);
@@ -164,6 +170,34 @@ fn coalign(points: &[Vec3], fitted: &Primitive, reference: &Primitive, err_befor
     let (sum, n) = points.iter().step_by(step).fold((0.0_f32, 0usize), |(s, n), p| (s + candidate.surface_distance(*p), n + 1));
     let err_after = sum / n.max(1) as f32;
     (err_after <= (err_before * 1.2).max(err_before + 0.001)).then_some((candidate, err_after))
+}
+
+/// Labels of parts that are boards or boxes in furniture (bodies, doors, drawers, tops, ...).
+fn is_box_like(label: &str) -> bool {
+    label_tokens(label).any(|t| {
+        matches!(
+            t.as_str(),
+            "body" | "door" | "drawer" | "lid" | "top" | "shelf" | "seat" | "back" | "frame" | "base" | "mattress" | "headboard" | "panel" | "board" | "cabinet"
+        )
+    })
+}
+
+/// A label shape prior: parts whose label names a board or a box keep the cuboid candidate unless
+/// another kind scores clearly better (by more than 25 %). A cabinet body seen only through the
+/// margins around its drawers is a thin frame of points that a cylinder can fit about as well.
+fn prefer_box_for_boards(label: &str, points: &[Vec3], fit: crate::fit::PartFit) -> crate::fit::PartFit {
+    if fit.primitive.kind == PrimitiveKind::Cuboid || !is_box_like(label) {
+        return fit;
+    }
+    let Some(cuboid) = fit.candidates.iter().filter(|c| c.primitive.kind == PrimitiveKind::Cuboid).min_by(|a, b| a.score.total_cmp(&b.score)) else {
+        return fit;
+    };
+    if cuboid.score > fit.score * 1.25 {
+        return fit;
+    }
+    let step = (points.len() / 4000).max(1);
+    let (sum, n) = points.iter().step_by(step).fold((0.0_f32, 0usize), |(s, n), p| (s + cuboid.primitive.surface_distance(*p), n + 1));
+    crate::fit::PartFit { primitive: cuboid.primitive, fit_error: sum / n.max(1) as f32, score: cuboid.score, candidates: fit.candidates }
 }
 
 /// Runs the whole pipeline on a scan.
@@ -266,6 +300,7 @@ pub fn assemble(
         relations: graph.relations,
         floor_z,
         warnings,
+        skipped_parts: fitted.skipped.clone(),
     };
     (scene, stats)
 }

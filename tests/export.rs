@@ -39,7 +39,7 @@ fn fitted() -> (FittedParts, BTreeMap<i64, String>) {
         part(22, 3, "handle", [2.11, 0.21, 0.91], [0.02, 0.03, 0.2]),
     ];
     let categories = BTreeMap::from([(1, "cabinet".to_owned()), (2, "table".to_owned()), (3, "microwave".to_owned())]);
-    (FittedParts { parts, warnings: vec![] }, categories)
+    (FittedParts { parts, skipped: vec![], warnings: vec![] }, categories)
 }
 
 fn scene() -> SceneModel {

@@ -40,7 +40,13 @@ fn undirected(a: PartId, b: PartId) -> [PartId; 2] {
 /// the contact weight of that parent → child pair (0 if the model lists no such contact edge),
 /// against the truth's undirected contact edges. Returns (AP, number of predicted edges).
 pub(crate) fn edge_ap(model: &SceneModel, truth: &TruthObject, model_parts: &BTreeSet<PartId>) -> (Option<f32>, usize) {
-    let truth_edges: BTreeSet<[PartId; 2]> = truth.contact_edges.iter().map(|e| undirected(e[0], e[1])).collect();
+    let unobserved = unobserved_parts(model, truth);
+    let truth_edges: BTreeSet<[PartId; 2]> = truth
+        .contact_edges
+        .iter()
+        .filter(|e| !unobserved.contains(&e[0]) && !unobserved.contains(&e[1]))
+        .map(|e| undirected(e[0], e[1]))
+        .collect();
     // (weight, edge); duplicates of one undirected edge keep their best weight.
     let mut predicted: Vec<(f32, [PartId; 2])> = Vec::new();
     for joint in &model.joints {
@@ -84,12 +90,18 @@ pub struct JointRow {
 
 /// Compares every truth joint of an object with the model's joint of the same child part.
 pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRow> {
+    // A part the scan never saw (not in the model and not skipped by fitting) cannot be judged.
+    let unobserved = |id: PartId| model.part(id).is_none() && model.skipped_parts.binary_search(&id).is_err();
     truth
         .joints
         .iter()
+        .filter(|t| !unobserved(t.child) && !unobserved(t.parent))
         .map(|t| {
             let part_missing = model.part(t.child).is_none();
-            let predicted = if part_missing { None } else { model.joint_of(t.child) };
+            // The model's joint between the same two parts, in either direction (a tree may hang
+            // a bed's frame off its headboard: the same kinematic edge); else the child's joint.
+            let same_pair = model.joints.iter().find(|j| (j.parent, j.child) == (t.parent, t.child) || (j.parent, j.child) == (t.child, t.parent));
+            let predicted = if part_missing { None } else { same_pair.or_else(|| model.joint_of(t.child)) };
             let predicted_kind = predicted.map(|j| j.kind);
             let type_correct = predicted_kind == Some(t.kind);
             let (mut axis_error_deg, mut hinge_distance_m) = (None, None);
@@ -111,6 +123,11 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
             }
         })
         .collect()
+}
+
+/// Truth parts of an object that the scan never saw: not in the model and not skipped by fitting.
+pub(crate) fn unobserved_parts(model: &SceneModel, truth: &TruthObject) -> Vec<PartId> {
+    truth.parts.iter().map(|p| p.id).filter(|&id| model.part(id).is_none() && model.skipped_parts.binary_search(&id).is_err()).collect()
 }
 
 #[cfg(test)]

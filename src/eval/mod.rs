@@ -49,8 +49,11 @@ pub struct ObjectRow {
     pub correct_types: usize,
     pub movable_joints: usize,
     pub movable_correct_types: usize,
-    /// Truth parts that are not in the model (their joints count as wrong types).
+    /// Truth parts that the scan has but the model lost (their joints count as wrong types).
     pub missing_parts: Vec<PartId>,
+    /// Truth parts the scan never saw: their joints and contact edges are not scored.
+    #[serde(default)]
+    pub unobserved_parts: Vec<PartId>,
 }
 
 impl ObjectRow {
@@ -86,6 +89,9 @@ pub struct Summary {
     pub hinges_measured: usize,
     pub median_hinge_distance_m: Option<f32>,
     pub missing_parts: usize,
+    /// Truth parts the scan never saw (not scored for joints and edges).
+    #[serde(default)]
+    pub unobserved_parts: usize,
     /// Model objects with no truth object of the same id.
     pub unmatched_model_objects: Vec<ObjectId>,
 }
@@ -111,8 +117,13 @@ pub fn evaluate(model: &SceneModel, truth: &GroundTruth) -> Metrics {
             let model_parts: BTreeSet<PartId> = model.parts_of(t.id).map(|p| p.id).collect();
             let (chamfer, iou) = geometry::object_geometry(&predicted, &geometry::truth_shapes(t));
             let (ap, predicted_edges) = kinematics::edge_ap(model, t, &model_parts);
-            let truth_edges: BTreeSet<[PartId; 2]> =
-                t.contact_edges.iter().map(|e| [e[0].min(e[1]), e[0].max(e[1])]).collect();
+            let unobserved_parts = kinematics::unobserved_parts(model, t);
+            let truth_edges: BTreeSet<[PartId; 2]> = t
+                .contact_edges
+                .iter()
+                .filter(|e| !unobserved_parts.contains(&e[0]) && !unobserved_parts.contains(&e[1]))
+                .map(|e| [e[0].min(e[1]), e[0].max(e[1])])
+                .collect();
             let joints = kinematics::joint_rows(model, t);
             let movable = joints.iter().filter(|j| j.truth_kind.is_movable());
             ObjectRow {
@@ -128,7 +139,8 @@ pub fn evaluate(model: &SceneModel, truth: &GroundTruth) -> Metrics {
                 correct_types: joints.iter().filter(|j| j.type_correct).count(),
                 movable_joints: movable.clone().count(),
                 movable_correct_types: movable.filter(|j| j.type_correct).count(),
-                missing_parts: t.parts.iter().map(|p| p.id).filter(|id| model.part(*id).is_none()).collect(),
+                missing_parts: t.parts.iter().map(|p| p.id).filter(|id| model.part(*id).is_none() && !unobserved_parts.contains(id)).collect(),
+                unobserved_parts,
                 joints,
             }
         })
@@ -178,6 +190,7 @@ fn summarise(objects: &[ObjectRow], unmatched_model_objects: Vec<ObjectId>) -> S
         hinges_measured: hinges.len(),
         median_hinge_distance_m: median(&hinges),
         missing_parts: objects.iter().map(|o| o.missing_parts.len()).sum(),
+        unobserved_parts: objects.iter().map(|o| o.unobserved_parts.len()).sum(),
         unmatched_model_objects,
     }
 }
@@ -267,6 +280,7 @@ impl Metrics {
             opt(m.median_hinge_distance_m, 3)
         );
         let _ = writeln!(s, "| truth parts missing from the model | {} |", m.missing_parts);
+        let _ = writeln!(s, "| truth parts the scan never saw (not scored) | {} |", m.unobserved_parts);
         s
     }
 }

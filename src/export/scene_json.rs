@@ -23,6 +23,8 @@ struct SceneJson {
     contact_edges: Vec<ContactEdge>,
     #[serde(default)]
     warnings: Vec<Warning>,
+    #[serde(default)]
+    skipped_parts: Vec<PartId>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -72,6 +74,7 @@ pub fn scene_json(scene: &SceneModel) -> String {
         relations: scene.relations.clone(),
         contact_edges: scene.contact_edges.clone(),
         warnings: scene.warnings.clone(),
+        skipped_parts: scene.skipped_parts.clone(),
     };
     // Serialising plain data to a string cannot fail.
     serde_json::to_string_pretty(&doc).unwrap_or_default()
@@ -98,6 +101,7 @@ pub fn scene_from_json(text: &str, path: &str) -> Result<SceneModel, SceneJsonEr
         relations: doc.relations,
         floor_z: doc.floor_z,
         warnings: doc.warnings,
+        skipped_parts: doc.skipped_parts,
     })
 }
 

@@ -3,8 +3,9 @@
 //! Scans are partial, so correspondences go data→model: every point is paired with its analytic
 //! closest point on the primitive surface ([`Primitive::closest_surface_point_local`]); surface the
 //! scanner never saw attracts nothing. Each iteration drops the worst `trim_fraction` of the
-//! residuals (stray points, other parts; never those below 3× the median, which on clean data
-//! are the informative ones), then solves the best rigid update of the model onto the data:
+//! residuals (stray points, other parts; never those below 3× the median or below
+//! `keep_within_rel` of the part's size, which on clean data are the informative ones), then
+//! solves the best rigid update of the model onto the data:
 //! - default (`point_to_plane`): one damped Gauss–Newton step on the point-to-plane distances
 //!   `nᵢ·(R cᵢ + t − pᵢ)`. Point-to-point ICP converges linearly, moving each step only by the
 //!   share of points whose normals see the error: a door board (96 % of its points on its two
@@ -13,24 +14,31 @@
 //!   ([`kabsch_rotation`]), the classic Besl–McKay update.
 //!
 //! Spheres only translate; the twist of cylinders and capsules about their own axis is dropped
-//! (it moves no surface).
+//! (it moves no surface). The result is the best primitive seen (mean residual truncated at a
+//! cap fixed on the first iteration); iteration stops on convergence or after three iterations
+//! without improvement (discrete face assignments can make the resize cycle).
 //!
 //! With `refit_size`, the size is re-estimated along the primitive's own axes after each rigid
-//! step, in the primitive frame, each point assigned to the face, side or cap it is closest to:
+//! step, in the primitive frame. Points are assigned to the face, side or cap they are closest
+//! to, measured against the data's own robust extent (2 %/98 % quantiles per axis), not against
+//! the model, which a stray point may have inflated or shifted:
 //! - a planar face pair (cuboid faces, cylinder caps): the median coordinate of the points on
 //!   each face (unbiased under zero-mean noise, unlike extreme percentiles). A face counts as
-//!   seen only with points in its central region; a face nobody saw is placed from the 2 %/98 %
-//!   percentiles of the points on the *other* faces, corrected for their uniform spread over the
-//!   interval (`lo = (p₂ − 0.02·hi)/0.98`); with no evidence at all the extent is kept. These
-//!   statistics use all points (robust ones), not the trimmed set, which would drop exactly the
-//!   points overhanging a too-small model;
+//!   seen only with points in its central region (points overhanging from a neighbouring face
+//!   hug its border); a face nobody saw is placed from the 0.5 %/99.5 % quantiles of the other
+//!   points along that axis, corrected for their uniform spread (`lo = (p − 0.005·hi)/0.995`);
+//!   with no evidence at all the extent is kept. Two "faces" closer than six times their spread
+//!   are one flat surface split by a tilted model: the extent is kept and the model is turned
+//!   onto the surface's plane instead (ICP alone stalls there, the points lying between the
+//!   model's faces). These statistics use all points (robust ones), not the trimmed set, which
+//!   would drop exactly the points overhanging a too-small model;
 //! - round surfaces: up to three Gauss–Newton steps of a geometric circle fit (cylinder and
 //!   capsule sides, in the cross-section) or sphere fit on the inliers, which recovers radius
-//!   *and* axis from a half-seen side;
-//! - capsule caps: each cap point votes for the end of the axis segment.
+//!   *and* axis from a half-seen side (arcs under ~60° are rejected: flat data has no radius);
+//! - capsule caps: a Gauss–Newton fit of each seen hemisphere gives the end of the axis segment.
 //!
 //! The kind's constraints are then re-imposed by [`PrimitiveKind::normalize_size`]. Size steps are
-//! limited to a factor of two per iteration.
+//! limited to a factor of two per iteration and to 1.25× the data's diameter.
 
 use super::obb::MIN_EXTENT_M;
 use super::{quantile_in_place, solve_linear};
@@ -92,10 +100,17 @@ pub fn icp_align(initial: &Primitive, points: &[Vec3], cfg: &IcpConfig) -> IcpRe
     let mut prim = *initial;
     prim.size = prim.kind.normalize_size(prim.size);
     if points.is_empty() {
-        return IcpResult { primitive: prim, mean_error: 0.0, iterations: 0 };
+        return IcpResult {
+            primitive: prim,
+            mean_error: 0.0,
+            iterations: 0,
+        };
     }
     let trim = cfg.trim_fraction.clamp(0.0, 0.9);
-    let (lo, hi) = points.iter().fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(l, h), p| (l.min(*p), h.max(*p)));
+    let (lo, hi) = points.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(l, h), p| (l.min(*p), h.max(*p)),
+    );
     let data_diameter = (hi - lo).length().max(MIN_EXTENT_M);
     let n = points.len();
     let mut local = vec![Vec3::ZERO; n];
@@ -125,7 +140,11 @@ pub fn icp_align(initial: &Primitive, points: &[Vec3], cfg: &IcpConfig) -> IcpRe
         let median = quantile_in_place(&mut scratch, 0.5).unwrap_or(0.0);
         // The objective tracked across iterations: the mean residual truncated at a cap fixed
         // on the first iteration (so every point counts, and strays count at most the cap).
-        let cap = *objective_cap.get_or_insert((3.0 * median).max(cfg.keep_within_rel * prim.size.max_element()).max(1e-6));
+        let cap = *objective_cap.get_or_insert(
+            (3.0 * median)
+                .max(cfg.keep_within_rel * prim.size.max_element())
+                .max(1e-6),
+        );
         let objective = resid.iter().map(|r| f64::from(r.min(cap))).sum::<f64>() / n as f64;
         match &best {
             Some(b) if objective >= b.0 * (1.0 - 1e-3) => stalled += 1,
@@ -174,7 +193,7 @@ pub fn icp_align(initial: &Primitive, points: &[Vec3], cfg: &IcpConfig) -> IcpRe
                 moved.push(rot.inverse() * (local[i] - trans));
                 inlier.push(resid[i] <= threshold);
             }
-            if let Some((size, shift)) = refit_size(next.kind, next.size, &moved, &inlier) {
+            if let Some((size, shift, correction)) = refit_size(next.kind, next.size, &moved, &inlier) {
                 // No extent beyond the data's own diameter (with a margin): a primitive that
                 // swallows the points has no surface near them to pull it back.
                 let size = next.kind.normalize_size(size.min(Vec3::splat(1.25 * data_diameter)));
@@ -182,20 +201,26 @@ pub fn icp_align(initial: &Primitive, points: &[Vec3], cfg: &IcpConfig) -> IcpRe
                 if size.is_finite() && center.is_finite() {
                     next.size = size;
                     next.world_from_primitive.translation = center;
+                    next.world_from_primitive.rotation = (next.world_from_primitive.rotation * correction).normalize();
                 }
             }
         }
         // Converged when the whole iteration (rigid step and resize) barely changed anything.
         let rot_step = next.rotation().angle_between(prim.rotation());
-        let move_step = (next.center() - prim.center()).length().max((next.size - prim.size).abs().max_element());
+        let move_step = (next.center() - prim.center())
+            .length()
+            .max((next.size - prim.size).abs().max_element());
         converged = rot_step < cfg.min_rotation_step_rad && move_step < cfg.min_translation_step_m;
-        if std::env::var("ICP_DEBUG").is_ok() { eprintln!("    it {iterations} obj {objective:.6} rot {rot_step:.2e} move {move_step:.2e} size {} dc {}", next.size, next.center() - prim.center()); }
         prim = next;
     }
 
     let prim = best.map_or(prim, |b| b.1);
     let mean_error = points.iter().map(|p| f64::from(prim.surface_distance(*p))).sum::<f64>() / n as f64;
-    IcpResult { primitive: prim, mean_error: mean_error as f32, iterations }
+    IcpResult {
+        primitive: prim,
+        mean_error: mean_error as f32,
+        iterations,
+    }
 }
 
 /// Point-to-point update (Kabsch on the centred inlier pairs): the rotation and translation
@@ -243,7 +268,14 @@ fn kabsch_update(
 /// where the point-to-point update only moves by the share of points whose normals see the
 /// error (a board slides along its face by the few percent of points on its edges).
 /// `None` when the system is degenerate.
-fn point_to_plane_update(prim: &Primitive, local: &[Vec3], closest: &[Vec3], resid: &[f32], threshold: f32) -> Option<(Quat, Vec3)> {
+#[allow(clippy::needless_range_loop)] // (row, column) index pairs of a symmetric 6×6 system
+fn point_to_plane_update(
+    prim: &Primitive,
+    local: &[Vec3],
+    closest: &[Vec3],
+    resid: &[f32],
+    threshold: f32,
+) -> Option<(Quat, Vec3)> {
     let mut a = [[0.0_f64; 6]; 6];
     let mut b = [0.0_f64; 6];
     let mut count = 0usize;
@@ -349,6 +381,8 @@ fn drop_twist_z(q: Quat) -> Quat {
 struct FacePair {
     coords: [Vec<f32>; 2],
     central: [usize; 2],
+    /// The points themselves (both faces), for the plane of a [`Faces::OneSurface`].
+    points: Vec<Vec3>,
 }
 
 /// What the points on a pair of opposite faces say.
@@ -362,10 +396,32 @@ enum Faces {
 
 impl FacePair {
     /// Adds a point on the − (`minus`) or + face.
-    fn add(&mut self, coord: f32, minus: bool, central: bool) {
+    fn add(&mut self, point: Vec3, coord: f32, minus: bool, central: bool) {
         let s = usize::from(minus);
         self.coords[s].push(coord);
         self.central[s] += usize::from(central);
+        self.points.push(point);
+    }
+
+    /// The rotation (primitive frame) turning `axis` onto the normal of the plane through the
+    /// points (their least principal axis), at most 0.3 rad; `None` without enough points.
+    fn plane_correction(&self, axis: Vec3, min_count: usize) -> Option<Quat> {
+        if self.points.len() < min_count.max(3) {
+            return None;
+        }
+        let (_, axes) = crate::math::principal_axes(&self.points);
+        let n = axes.z_axis;
+        let n = if n.dot(axis) < 0.0 { -n } else { n };
+        let q = Quat::from_rotation_arc(axis, n.normalize_or(axis));
+        let angle = q.angle_between(Quat::IDENTITY);
+        if !angle.is_finite() {
+            return None;
+        }
+        Some(if angle > 0.3 {
+            Quat::IDENTITY.slerp(q, 0.3 / angle)
+        } else {
+            q
+        })
     }
 
     /// Median positions (the median: stray points are not trimmed away here, see
@@ -383,30 +439,36 @@ impl FacePair {
         };
         match (at(0), at(1)) {
             (Some((hi, mad_hi)), Some((lo, mad_lo))) if hi - lo <= 6.0 * mad_hi.max(mad_lo) => Faces::OneSurface,
-            (plus, minus) => Faces::Seen { plus: plus.map(|p| p.0), minus: minus.map(|m| m.0) },
+            (plus, minus) => Faces::Seen {
+                plus: plus.map(|p| p.0),
+                minus: minus.map(|m| m.0),
+            },
         }
     }
 }
 
-/// The 0.5 % and 99.5 % quantiles of `values` (the data's own robust extent), or `None`.
+/// The 2 % and 98 % quantiles of `values` (the data's own robust extent, a little inside it,
+/// never widened by a stray point or two), or `None`.
 fn rough_interval(values: &mut [f32]) -> Option<(f32, f32)> {
-    let lo = quantile_in_place(values, 0.005)?;
-    let hi = quantile_in_place(values, 0.995)?;
+    let lo = quantile_in_place(values, 0.02)?;
+    let hi = quantile_in_place(values, 0.98)?;
     (lo.is_finite() && hi.is_finite()).then_some((lo, hi.max(lo)))
 }
 
-/// New (size, centre shift in the primitive frame) from the points in the primitive frame.
+/// New (size, centre shift in the primitive frame, rotation correction in the primitive frame)
+/// from the points in the primitive frame.
 ///
 /// Points are assigned to faces against the data's own robust extent along each axis (not the
 /// current model, which may be inflated by a stray point or offset). Extents use *all* points
 /// with robust statistics (face medians, percentiles): the trimmed set would lose exactly the
 /// points that overhang a too-small model, which is the evidence that it must grow. Radii use
 /// the trimmed `inlier` points (least-squares fits).
-fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) -> Option<(Vec3, Vec3)> {
+fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) -> Option<(Vec3, Vec3, Quat)> {
     let min_count = (pts.len() / 100).max(5);
     if pts.len() < min_count || inlier.len() != pts.len() {
         return None;
     }
+    let mut correction = Quat::IDENTITY;
     let h = size * 0.5;
     let mut buf: Vec<f32> = Vec::with_capacity(pts.len());
     let (new_size, shift) = match kind {
@@ -417,8 +479,16 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                 buf.extend(pts.iter().map(|p| p[k]));
                 *r = rough_interval(&mut buf)?;
             }
-            let rc = Vec3::new(rough[0].0 + rough[0].1, rough[1].0 + rough[1].1, rough[2].0 + rough[2].1) * 0.5;
-            let rh = (Vec3::new(rough[0].1 - rough[0].0, rough[1].1 - rough[1].0, rough[2].1 - rough[2].0) * 0.5)
+            let rc = Vec3::new(
+                rough[0].0 + rough[0].1,
+                rough[1].0 + rough[1].1,
+                rough[2].0 + rough[2].1,
+            ) * 0.5;
+            let rh = (Vec3::new(
+                rough[0].1 - rough[0].0,
+                rough[1].1 - rough[1].0,
+                rough[2].1 - rough[2].0,
+            ) * 0.5)
                 .max(Vec3::splat(0.5 * MIN_EXTENT_M));
             let mut faces: [FacePair; 3] = Default::default();
             let mut assigned: Vec<(usize, usize)> = Vec::with_capacity(pts.len()); // (axis, side)
@@ -434,11 +504,12 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                 };
                 let (i, j) = ((k + 1) % 3, (k + 2) % 3);
                 let central = d[i].abs() < 0.5 * rh[i] && d[j].abs() < 0.5 * rh[j];
-                faces[k].add(p[k], d[k] < 0.0, central);
+                faces[k].add(*p, p[k], d[k] < 0.0, central);
                 assigned.push((k, usize::from(d[k] < 0.0)));
             }
             let mut size_new = size;
             let mut shift = Vec3::ZERO;
+            let mut tilt_support = 0usize;
             for (k, face) in faces.iter_mut().enumerate() {
                 let (lo, hi) = match face.positions(min_count) {
                     Faces::Seen { plus, minus } => {
@@ -446,14 +517,28 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                         // Every point not on a seen face of this axis spreads over the axis'
                         // interval (points overhanging a too-small model included).
                         buf.clear();
-                        buf.extend(pts.iter().zip(&assigned).filter(|(_, (a, s))| *a != k || !seen[*s]).map(|(p, _)| p[k]));
+                        buf.extend(
+                            pts.iter()
+                                .zip(&assigned)
+                                .filter(|(_, (a, s))| *a != k || !seen[*s])
+                                .map(|(p, _)| p[k]),
+                        );
                         interval(plus, minus, &mut buf, rough[k], size[k], min_count)
                     }
                     // Not observable while the box is tilted against the surface: keep the
-                    // extent (growing it to the data's spread feeds the tilt).
-                    Faces::OneSurface => (-h[k], h[k]),
+                    // extent (growing it to the data's spread feeds the tilt) and turn the box
+                    // onto the surface's plane instead (ICP alone stalls there: the points lie
+                    // inside the box, between its faces).
+                    Faces::OneSurface => {
+                        if face.points.len() > tilt_support
+                            && let Some(q) = face.plane_correction(Vec3::AXES[k], min_count)
+                        {
+                            tilt_support = face.points.len();
+                            correction = q;
+                        }
+                        (-h[k], h[k])
+                    }
                 };
-                if std::env::var("ICP_DEBUG").is_ok() { eprintln!("      axis {k}: rough {:?} -> [{lo}, {hi}] faces {}/{} {}/{}", rough[k], face.coords[0].len(), face.central[0], face.coords[1].len(), face.central[1]); }
                 size_new[k] = hi - lo;
                 shift[k] = 0.5 * (lo + hi);
             }
@@ -464,7 +549,10 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
             buf.clear();
             buf.extend(pts.iter().map(|p| p.z));
             let rough = rough_interval(&mut buf)?;
-            let (rcz, rhz) = (0.5 * (rough.0 + rough.1), (0.5 * (rough.1 - rough.0)).max(0.5 * MIN_EXTENT_M));
+            let (rcz, rhz) = (
+                0.5 * (rough.0 + rough.1),
+                (0.5 * (rough.1 - rough.0)).max(0.5 * MIN_EXTENT_M),
+            );
             let mut caps = FacePair::default();
             let mut side_xy = Vec::new();
             let mut lateral = Vec::new();
@@ -477,7 +565,7 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                     }
                     lateral.push(p.z);
                 } else {
-                    caps.add(p.z, p.z < rcz, rho < 0.5 * r);
+                    caps.add(*p, p.z, p.z < rcz, rho < 0.5 * r);
                     if *ok {
                         cap_xy.push(Vec2::new(p.x, p.y));
                     }
@@ -493,9 +581,17 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                     }
                     interval(plus, minus, &mut lateral, rough, size.z, min_count)
                 }
-                Faces::OneSurface => (-h.z, h.z),
+                Faces::OneSurface => {
+                    if let Some(q) = caps.plane_correction(Vec3::Z, min_count) {
+                        correction = q;
+                    }
+                    (-h.z, h.z)
+                }
             };
-            (Vec3::new(2.0 * radius, 2.0 * radius, hi - lo), Vec3::new(centre.x, centre.y, 0.5 * (lo + hi)))
+            (
+                Vec3::new(2.0 * radius, 2.0 * radius, hi - lo),
+                Vec3::new(centre.x, centre.y, 0.5 * (lo + hi)),
+            )
         }
         PrimitiveKind::Sphere => {
             let kept: Vec<Vec3> = pts.iter().zip(inlier).filter(|(_, ok)| **ok).map(|(p, _)| *p).collect();
@@ -524,11 +620,19 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                     // This cap point's vote for the end of the axis segment.
                     let rho2 = p.x * p.x + p.y * p.y;
                     let lift = (r * r - rho2).max(0.0).sqrt();
-                    ends.add(p.z - lift * p.z.signum(), p.z < 0.0, rho2 < 0.25 * r * r);
+                    ends.add(*p, p.z - lift * p.z.signum(), p.z < 0.0, rho2 < 0.25 * r * r);
                 }
             }
-            let fit = if side_xy.len() >= min_count { circle_fit_gn(&side_xy, r) } else { None };
-            let mean_radial = if radial_count > 0 { (radial_sum / radial_count as f64) as f32 } else { r };
+            let fit = if side_xy.len() >= min_count {
+                circle_fit_gn(&side_xy, r)
+            } else {
+                None
+            };
+            let mean_radial = if radial_count > 0 {
+                (radial_sum / radial_count as f64) as f32
+            } else {
+                r
+            };
             let (centre, radius) = fit.unwrap_or((Vec2::ZERO, mean_radial));
             let (lo, hi) = match ends.positions(min_count) {
                 Faces::Seen { plus, minus } => {
@@ -537,17 +641,64 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                             lateral.extend_from_slice(&ends.coords[s]);
                         }
                     }
+                    // The median vote is a start; a geometric fit of the hemisphere (all its
+                    // points, the rim weighted down) finds the end (votes of rim points are
+                    // biased by noise).
+                    let axis = Vec3::new(centre.x, centre.y, 0.0);
+                    let refine = |start: f32, sign: f32| {
+                        let cap: Vec<Vec3> = ends
+                            .points
+                            .iter()
+                            .filter(|p| p.z * sign > 0.0)
+                            .map(|p| *p - axis)
+                            .collect();
+                        cap_end_fit(&cap, start, radius)
+                    };
+                    let plus = plus.map(|e| refine(e, 1.0));
+                    let minus = minus.map(|e| refine(e, -1.0));
                     interval(plus, minus, &mut lateral, (-a, a), 2.0 * a, min_count)
                 }
                 Faces::OneSurface => (-a, a),
             };
             let length = (hi - lo).max(0.0) + 2.0 * radius;
-            (Vec3::new(2.0 * radius, 2.0 * radius, length), Vec3::new(centre.x, centre.y, 0.5 * (lo + hi)))
+            (
+                Vec3::new(2.0 * radius, 2.0 * radius, length),
+                Vec3::new(centre.x, centre.y, 0.5 * (lo + hi)),
+            )
         }
     };
     // At most a factor of two per step; never below the minimum extent.
     let new_size = new_size.clamp(size * 0.5, size * 2.0).max(Vec3::splat(MIN_EXTENT_M));
-    (new_size.is_finite() && shift.is_finite()).then_some((new_size, shift))
+    (new_size.is_finite() && shift.is_finite() && correction.is_finite()).then_some((new_size, shift, correction))
+}
+
+/// The end `e` of a capsule's axis segment (on z) whose hemisphere of radius `r` best fits the
+/// cap points: Gauss–Newton on `|p − (0, 0, e)| − r`, from `start`.
+fn cap_end_fit(cap: &[Vec3], start: f32, r: f32) -> f32 {
+    let mut e = f64::from(start);
+    let r = f64::from(r);
+    for _ in 0..3 {
+        let (mut num, mut den) = (0.0_f64, 0.0_f64);
+        for p in cap {
+            let d = Vec3::new(p.x, p.y, p.z - e as f32).as_dvec3();
+            let len = d.length();
+            if len < 1e-9 {
+                continue;
+            }
+            let j = -d.z / len;
+            num += (len - r) * j;
+            den += j * j;
+        }
+        if den <= 1e-12 {
+            break;
+        }
+        let step = -num / den;
+        e += step.clamp(-r, r);
+        if step.abs() < 1e-7 {
+            break;
+        }
+    }
+    if e.is_finite() { e as f32 } else { start }
 }
 
 /// Centre (cross-section) and radius of a round surface: a circle fit on the side points, or
@@ -607,7 +758,11 @@ fn circle_fit_gn(pts: &[Vec2], r0: f32) -> Option<(Vec2, f32)> {
     // An arc narrower than ~60° (mean resultant length of the directions > 0.95) pins neither
     // the radius nor the centre: flat data would send the radius to infinity.
     let c = Vec2::new(cx as f32, cy as f32);
-    let resultant = pts.iter().fold(Vec2::ZERO, |s, p| s + (*p - c).normalize_or_zero()).length() / pts.len().max(1) as f32;
+    let resultant = pts
+        .iter()
+        .fold(Vec2::ZERO, |s, p| s + (*p - c).normalize_or_zero())
+        .length()
+        / pts.len().max(1) as f32;
     (r.is_finite() && r > 0.0 && resultant < 0.95).then_some((c, r as f32))
 }
 
@@ -645,7 +800,11 @@ fn sphere_fit_gn(pts: &[Vec3], r0: f32) -> Option<(Vec3, f32)> {
     }
     // A cap narrower than ~25° half-angle pins neither the radius nor the centre.
     let cf = c.as_vec3();
-    let resultant = pts.iter().fold(Vec3::ZERO, |s, p| s + (*p - cf).normalize_or_zero()).length() / pts.len().max(1) as f32;
+    let resultant = pts
+        .iter()
+        .fold(Vec3::ZERO, |s, p| s + (*p - cf).normalize_or_zero())
+        .length()
+        / pts.len().max(1) as f32;
     (r.is_finite() && r > 0.0 && c.is_finite() && resultant < 0.95).then_some((cf, r as f32))
 }
 
@@ -653,7 +812,14 @@ fn sphere_fit_gn(pts: &[Vec3], r0: f32) -> Option<(Vec3, f32)> {
 /// coordinates of the points on the other faces (`lateral`, uniform over the interval).
 /// `rough` (the data's own extent) stands in when there is no evidence at all; `span` (the
 /// current extent) when one face is seen and nothing else.
-fn interval(plus: Option<f32>, minus: Option<f32>, lateral: &mut [f32], rough: (f32, f32), span: f32, min_count: usize) -> (f32, f32) {
+fn interval(
+    plus: Option<f32>,
+    minus: Option<f32>,
+    lateral: &mut [f32],
+    rough: (f32, f32),
+    span: f32,
+    min_count: usize,
+) -> (f32, f32) {
     const Q: f32 = 0.005;
     let lat = if lateral.len() >= min_count {
         quantile_in_place(lateral, Q).zip(quantile_in_place(lateral, 1.0 - Q))
@@ -691,7 +857,10 @@ mod tests {
         Primitive::new(
             PrimitiveKind::Cuboid,
             Vec3::new(0.6, 0.4, 0.8),
-            Pose::from_parts(Vec3::new(1.0, -0.5, 0.4), Quat::from_euler(glam::EulerRot::XYZ, 0.1, -0.2, 0.7)),
+            Pose::from_parts(
+                Vec3::new(1.0, -0.5, 0.4),
+                Quat::from_euler(glam::EulerRot::XYZ, 0.1, -0.2, 0.7),
+            ),
         )
     }
 
@@ -715,7 +884,11 @@ mod tests {
         let truth = true_box();
         let pts = truth.sample_surface(2000);
         for point_to_plane in [true, false] {
-            let cfg = IcpConfig { point_to_plane, max_iterations: 30, ..IcpConfig::default() };
+            let cfg = IcpConfig {
+                point_to_plane,
+                max_iterations: 30,
+                ..IcpConfig::default()
+            };
             let res = icp_align(&perturbed(&truth), &pts, &cfg);
             assert_pose_close(&res.primitive, &truth);
             assert!(res.mean_error < 1e-3, "{}", res.mean_error);
@@ -740,16 +913,27 @@ mod tests {
         assert_pose_close(&res.primitive, &truth);
         assert!(res.iterations < 20, "point-to-plane took {} iterations", res.iterations);
         // The point-to-point (Kabsch) update gets there too, more slowly.
-        let cfg = IcpConfig { max_iterations: 40, point_to_plane: false, ..IcpConfig::default() };
+        let cfg = IcpConfig {
+            max_iterations: 40,
+            point_to_plane: false,
+            ..IcpConfig::default()
+        };
         let res = icp_align(&perturbed(&truth), &pts, &cfg);
         assert_pose_close(&res.primitive, &truth);
         // With size re-estimation from a wrong initial size.
         let mut start = perturbed(&truth);
         start.size = truth.size * Vec3::new(1.1, 0.92, 1.05);
-        let cfg = IcpConfig { refit_size: true, ..IcpConfig::default() };
+        let cfg = IcpConfig {
+            refit_size: true,
+            ..IcpConfig::default()
+        };
         let res = icp_align(&start, &pts, &cfg);
         assert_pose_close(&res.primitive, &truth);
-        assert!((res.primitive.size - truth.size).abs().max_element() < 0.005, "{}", res.primitive.size);
+        assert!(
+            (res.primitive.size - truth.size).abs().max_element() < 0.005,
+            "{}",
+            res.primitive.size
+        );
     }
 
     #[test]
@@ -775,7 +959,10 @@ mod tests {
         let truth = Primitive::new(
             PrimitiveKind::Cuboid,
             Vec3::new(0.3, 0.6, 0.028),
-            Pose::from_parts(Vec3::new(0.3, 0.8, 0.5), Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.2, 1.1)),
+            Pose::from_parts(
+                Vec3::new(0.3, 0.8, 0.5),
+                Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.2, 1.1),
+            ),
         );
         let h = truth.size * 0.5;
         let pts: Vec<Vec3> = truth
@@ -799,12 +986,28 @@ mod tests {
             let mut start = truth;
             start.size.z = 0.015;
             start.world_from_primitive.rotation = truth.rotation() * Quat::from_rotation_y(tilt_deg.to_radians());
-            let res = icp_align(&start, &pts, &IcpConfig { refit_size: true, ..IcpConfig::default() });
-            std::env::var("ICP_DEBUG").is_ok().then(|| eprintln!("{:?}", res));
+            let res = icp_align(
+                &start,
+                &pts,
+                &IcpConfig {
+                    refit_size: true,
+                    ..IcpConfig::default()
+                },
+            );
             // Noise biases the extents of the unseen faces outwards by ~2σ (extreme percentiles).
-            assert!((res.primitive.size - truth.size).abs().max_element() < 0.008, "tilt {tilt_deg}: {}", res.primitive.size);
-            assert!((res.primitive.center() - truth.center()).length() < 0.005, "tilt {tilt_deg}");
-            assert!(res.primitive.rotation().angle_between(truth.rotation()).to_degrees() < 0.5, "tilt {tilt_deg}");
+            assert!(
+                (res.primitive.size - truth.size).abs().max_element() < 0.008,
+                "tilt {tilt_deg}: {}",
+                res.primitive.size
+            );
+            assert!(
+                (res.primitive.center() - truth.center()).length() < 0.005,
+                "tilt {tilt_deg}"
+            );
+            assert!(
+                res.primitive.rotation().angle_between(truth.rotation()).to_degrees() < 0.5,
+                "tilt {tilt_deg}"
+            );
         }
     }
 
@@ -827,24 +1030,42 @@ mod tests {
         let mut start = truth;
         start.size = Vec3::new(0.36, 0.36, 0.75);
         start.world_from_primitive.translation += Vec3::new(0.02, 0.0, -0.01);
-        let cfg = IcpConfig { refit_size: true, max_iterations: 30, ..IcpConfig::default() };
+        let cfg = IcpConfig {
+            refit_size: true,
+            max_iterations: 30,
+            ..IcpConfig::default()
+        };
         let res = icp_align(&start, &pts, &cfg);
         let got = res.primitive;
         assert!((got.size.x - 0.3).abs() < 0.006, "diameter {}", got.size.x);
         assert!((got.size.z - 0.7).abs() < 0.01, "height {}", got.size.z);
         let axis_err = crate::math::line_angle_deg(got.axes_world()[2], truth.axes_world()[2]);
         assert!(axis_err < 1.0, "{axis_err}°");
-        assert!(crate::math::line_line_distance(got.center(), got.axes_world()[2], truth.center(), truth.axes_world()[2]) < 0.003);
+        assert!(
+            crate::math::line_line_distance(got.center(), got.axes_world()[2], truth.center(), truth.axes_world()[2])
+                < 0.003
+        );
     }
 
     #[test]
     fn refits_a_sphere_from_a_hemisphere() {
-        let truth = Primitive::new(PrimitiveKind::Sphere, Vec3::splat(0.25), Pose::from_translation(Vec3::new(0.0, 1.0, 2.0)));
+        let truth = Primitive::new(
+            PrimitiveKind::Sphere,
+            Vec3::splat(0.25),
+            Pose::from_translation(Vec3::new(0.0, 1.0, 2.0)),
+        );
         let pts: Vec<Vec3> = truth.sample_surface(2000).into_iter().filter(|p| p.z > 2.0).collect();
         let mut start = truth;
         start.size = Vec3::splat(0.3);
         start.world_from_primitive.translation += Vec3::new(0.01, -0.02, 0.03);
-        let res = icp_align(&start, &pts, &IcpConfig { refit_size: true, ..IcpConfig::default() });
+        let res = icp_align(
+            &start,
+            &pts,
+            &IcpConfig {
+                refit_size: true,
+                ..IcpConfig::default()
+            },
+        );
         assert!((res.primitive.size.x - 0.25).abs() < 0.002, "{}", res.primitive.size);
         assert!((res.primitive.center() - truth.center()).length() < 0.002);
     }
@@ -859,7 +1080,14 @@ mod tests {
         pts.push(Vec3::NAN);
         let mut r = rng(1);
         pts.push(Vec3::new(r.random(), f32::INFINITY, 0.0));
-        let res = icp_align(&truth, &pts, &IcpConfig { refit_size: true, ..IcpConfig::default() });
+        let res = icp_align(
+            &truth,
+            &pts,
+            &IcpConfig {
+                refit_size: true,
+                ..IcpConfig::default()
+            },
+        );
         assert!(res.primitive.world_from_primitive.is_finite() && res.mean_error < 1e-3);
     }
 }

@@ -32,6 +32,8 @@ pub struct FitConfig {
     pub screen_keep_max: usize,
     /// ... those whose mean point→surface error is within this factor of the best one.
     pub screen_keep_ratio: f32,
+    /// The best candidate of each kind is also aligned when its error is within this factor.
+    pub screen_keep_ratio_per_kind: f32,
     /// Neighbours in the statistical outlier filter (0 disables the filter; the point spacing is
     /// still measured with one neighbour).
     pub outlier_neighbors: usize,
@@ -62,10 +64,14 @@ impl Default for FitConfig {
             max_points_for_fit: 1500,
             max_points_for_selection: 300,
             kinds: PrimitiveKind::ALL.to_vec(),
-            icp: IcpConfig { refit_size: true, ..IcpConfig::default() },
+            icp: IcpConfig {
+                refit_size: true,
+                ..IcpConfig::default()
+            },
             screen_iterations: 4,
-            screen_keep_max: 3,
+            screen_keep_max: 2,
             screen_keep_ratio: 1.5,
+            screen_keep_ratio_per_kind: 6.0,
             outlier_neighbors: 4,
             outlier_factor: 3.0,
             score_samples: 128,
@@ -81,6 +87,7 @@ impl Default for FitConfig {
 /// One aligned candidate and its selection score (lower is better).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Candidate {
+    /// The aligned candidate primitive.
     pub primitive: Primitive,
     /// Selection score, metres (see [`crate::fit`]).
     pub score: f32,
@@ -103,10 +110,13 @@ pub struct PartFit {
 /// Why a part could not be fitted.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum FitError {
+    /// Fewer points than `FitConfig::min_points` (at least 4).
     #[error("part has {got} points; fitting a primitive needs at least {min}")]
     TooFewPoints { got: usize, min: usize },
+    /// A point with a NaN or infinite coordinate (index into the part's points).
     #[error("part point {index} is not finite: ({x}, {y}, {z})")]
     NonFinite { index: usize, x: f32, y: f32, z: f32 },
+    /// Nothing to fit: all points (nearly) coincide, no kinds to try, or no candidate aligned.
     #[error("degenerate part: {reason}")]
     Degenerate { reason: String },
 }
@@ -121,69 +131,90 @@ pub fn fit_part(points: &[Vec3], cfg: &FitConfig, forced_kind: Option<PrimitiveK
         return Err(FitError::TooFewPoints { got: points.len(), min });
     }
     if let Some((index, p)) = points.iter().enumerate().find(|(_, p)| !p.is_finite()) {
-        return Err(FitError::NonFinite { index, x: p.x, y: p.y, z: p.z });
+        return Err(FitError::NonFinite {
+            index,
+            x: p.x,
+            y: p.y,
+            z: p.z,
+        });
     }
-    let t0 = std::time::Instant::now();
-    let dbg = std::env::var("FIT_DEBUG").is_ok();
     let fit_set = subsample_stride(points, cfg.max_points_for_fit.max(min));
-    let coords: Vec<[f32; 3]> = fit_set.iter().map(|p| p.to_array()).collect();
-    let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&coords)
-        .map_err(|e| FitError::Degenerate { reason: format!("cannot index the part's points: {e:?}") })?;
+    let coords: Vec<[f32; 3]> = fit_set.iter().map(Vec3::to_array).collect();
+    let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&coords).map_err(|e| FitError::Degenerate {
+        reason: format!("cannot index the part's points: {e:?}"),
+    })?;
     // Stray points are dropped from the selection subsample (neighbours looked up among the
     // denser fit set): the minimal box is built on it and would be inflated by them.
     let selection_raw = subsample_stride(&fit_set, cfg.max_points_for_selection.max(min));
     let (filtered, spacing) = drop_isolated(&selection_raw, &tree, cfg.outlier_neighbors.max(1), cfg.outlier_factor);
-    let selection = if cfg.outlier_neighbors > 0 && filtered.len() >= min { filtered } else { selection_raw };
+    let selection = if cfg.outlier_neighbors > 0 && filtered.len() >= min {
+        filtered
+    } else {
+        selection_raw
+    };
 
-    if dbg { eprintln!("tree+filter {:.3}", t0.elapsed().as_secs_f64()*1e3); }
     let obb = min_volume_obb(&selection);
-    if dbg { eprintln!("obb {:.3} {:?} selection {} of {}", t0.elapsed().as_secs_f64()*1e3, obb, selection.len(), fit_set.len()); }
     if obb.size.max_element() < 2.0 * MIN_EXTENT_M {
         return Err(FitError::Degenerate {
-            reason: format!("all {} points lie within {} mm of each other", points.len(), 2.0 * MIN_EXTENT_M * 1000.0),
+            reason: format!(
+                "all {} points lie within {} mm of each other",
+                points.len(),
+                2.0 * MIN_EXTENT_M * 1000.0
+            ),
         });
     }
 
-    let kinds: Vec<PrimitiveKind> = match forced_kind {
-        Some(k) => vec![k],
-        None => {
-            let mut ks = Vec::new();
-            for k in &cfg.kinds {
-                if !ks.contains(k) {
-                    ks.push(*k);
-                }
+    let kinds: Vec<PrimitiveKind> = if let Some(k) = forced_kind {
+        vec![k]
+    } else {
+        let mut ks = Vec::new();
+        for k in &cfg.kinds {
+            if !ks.contains(k) {
+                ks.push(*k);
             }
-            ks
         }
+        ks
     };
     if kinds.is_empty() {
-        return Err(FitError::Degenerate { reason: "no primitive kinds to try (FitConfig::kinds is empty)".into() });
+        return Err(FitError::Degenerate {
+            reason: "no primitive kinds to try (FitConfig::kinds is empty)".into(),
+        });
     }
 
     // Screening: a few ICP iterations per template; only the candidates whose mean point→surface
     // error is close to the best one are aligned to convergence (the others keep their
     // screening pose and are still scored and listed).
-    let screen_icp = IcpConfig { max_iterations: cfg.screen_iterations.min(cfg.icp.max_iterations), ..cfg.icp.clone() };
+    let screen_icp = IcpConfig {
+        max_iterations: cfg.screen_iterations.min(cfg.icp.max_iterations),
+        ..cfg.icp.clone()
+    };
     let mut screened: Vec<(Primitive, f32)> = Vec::new();
     let pca_box = pca_obb(&selection);
     let pca_box = (axes_angle_deg(&pca_box.axes, &obb.axes) > 1.0).then_some(&pca_box);
     for template in templates(&obb, pca_box, &kinds) {
         let res = icp_align(&template, &selection, &screen_icp);
-        if dbg { eprintln!("  screen {:?} it {} err {:.4}", template.kind, res.iterations, res.mean_error); }
         let p = res.primitive;
         if p.world_from_primitive.is_finite() && p.size.is_finite() && res.mean_error.is_finite() {
             screened.push((p, res.mean_error));
         }
     }
-    if dbg { eprintln!("screen {:.3}", t0.elapsed().as_secs_f64()*1e3); }
     let mut order: Vec<usize> = (0..screened.len()).collect();
     order.sort_by(|a, b| screened[*a].1.total_cmp(&screened[*b].1).then(a.cmp(b)));
     let best_error = order.first().map_or(f32::INFINITY, |i| screened[*i].1);
     let mut measured = Vec::with_capacity(screened.len());
     for (i, (p, error)) in screened.iter().enumerate() {
         let rank = order.iter().position(|o| *o == i).unwrap_or(usize::MAX);
-        let promising = rank < cfg.screen_keep_max.max(1) && *error <= best_error * cfg.screen_keep_ratio.max(1.0) + 1e-4;
-        let aligned = if promising { let r = icp_align(p, &selection, &cfg.icp); if dbg { eprintln!("  align {:?} it {}", p.kind, r.iterations); } r.primitive } else { *p };
+        // The first of its kind in the ranking gets a second chance: a template whose box was
+        // inflated by a near stray point converges more slowly than the others.
+        let first_of_kind = order.iter().find(|o| screened[**o].0.kind == p.kind) == Some(&i);
+        let promising = (rank < cfg.screen_keep_max.max(1)
+            && *error <= best_error * cfg.screen_keep_ratio.max(1.0) + 1e-4)
+            || (first_of_kind && *error <= best_error * cfg.screen_keep_ratio_per_kind.max(1.0) + 1e-4);
+        let aligned = if promising {
+            icp_align(p, &selection, &cfg.icp).primitive
+        } else {
+            *p
+        };
         if aligned.world_from_primitive.is_finite() && aligned.size.is_finite() {
             measured.push(measure(&aligned, &selection, &tree, cfg));
         }
@@ -199,17 +230,20 @@ pub fn fit_part(points: &[Vec3], cfg: &FitConfig, forced_kind: Option<PrimitiveK
         .clamp(cfg.coverage_fraction.clamp(0.0, 1.0), 1.0);
     let candidates: Vec<Candidate> = measured
         .iter()
-        .map(|m| Candidate { primitive: m.primitive, score: m.score(fraction, cfg.coverage_weight) })
+        .map(|m| Candidate {
+            primitive: m.primitive,
+            score: m.score(fraction, cfg.coverage_weight),
+        })
         .filter(|c| c.score.is_finite())
         .collect();
-    if dbg { eprintln!("align+score {:.3} fraction {fraction}", t0.elapsed().as_secs_f64()*1e3); }
-    let chosen = choose(&candidates, cfg.tie_tolerance, cfg.capsule_penalty)
-        .ok_or_else(|| FitError::Degenerate { reason: "no candidate primitive could be aligned".into() })?;
+    let chosen = choose(&candidates, cfg.tie_tolerance, cfg.capsule_penalty).ok_or_else(|| FitError::Degenerate {
+        reason: "no candidate primitive could be aligned".into(),
+    })?;
 
     // Final alignment on the larger subsample, without the points far from the chosen primitive
     // (strays; the size statistics use all points given); kept unless it made things worse.
     let kept = near_points(&chosen.primitive, &fit_set);
-    let refined = icp_align(&chosen.primitive, &kept, &cfg.icp); if dbg { eprintln!("  final it {}", refined.iterations); } let refined = refined.primitive;
+    let refined = icp_align(&chosen.primitive, &kept, &cfg.icp).primitive;
     let refined_score = measure(&refined, &selection, &tree, cfg).score(fraction, cfg.coverage_weight);
     let (primitive, score) = if refined.world_from_primitive.is_finite()
         && refined_score.is_finite()
@@ -219,9 +253,17 @@ pub fn fit_part(points: &[Vec3], cfg: &FitConfig, forced_kind: Option<PrimitiveK
     } else {
         (chosen.primitive, chosen.score)
     };
-    if dbg { eprintln!("final {:.3}", t0.elapsed().as_secs_f64()*1e3); }
-    let fit_error = (points.iter().map(|p| f64::from(primitive.surface_distance(*p))).sum::<f64>() / points.len() as f64) as f32;
-    Ok(PartFit { primitive, fit_error, score, candidates })
+    let fit_error = (points
+        .iter()
+        .map(|p| f64::from(primitive.surface_distance(*p)))
+        .sum::<f64>()
+        / points.len() as f64) as f32;
+    Ok(PartFit {
+        primitive,
+        fit_error,
+        score,
+        candidates,
+    })
 }
 
 /// The paper's templates scaled by the minimal box: the box itself, cylinders and capsules along
@@ -237,10 +279,18 @@ fn templates(obb: &Obb, pca_box: Option<&Obb>, kinds: &[PrimitiveKind]) -> Vec<P
             PrimitiveKind::Cuboid => {
                 out.push(Primitive::new(*kind, obb.size, pose_of(obb.axes)));
                 if let Some(b) = pca_box {
-                    out.push(Primitive::new(*kind, b.size, Pose::from_parts(b.center, Quat::from_mat3(&b.axes).normalize())));
+                    out.push(Primitive::new(
+                        *kind,
+                        b.size,
+                        Pose::from_parts(b.center, Quat::from_mat3(&b.axes).normalize()),
+                    ));
                 }
             }
-            PrimitiveKind::Sphere => out.push(Primitive::new(*kind, Vec3::splat(obb.size.element_sum() / 3.0), pose_of(obb.axes))),
+            PrimitiveKind::Sphere => out.push(Primitive::new(
+                *kind,
+                Vec3::splat(obb.size.element_sum() / 3.0),
+                pose_of(obb.axes),
+            )),
             PrimitiveKind::Cylinder | PrimitiveKind::Capsule => {
                 for k in 0..3 {
                     // Cyclic permutation keeps the frame right-handed; the axis becomes local z.
@@ -291,7 +341,11 @@ fn measure(prim: &Primitive, points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, cf
     let data_to_model = if points.is_empty() {
         f32::INFINITY
     } else {
-        (points.iter().map(|p| f64::from(prim.surface_distance(*p).min(cap))).sum::<f64>() / points.len() as f64) as f32
+        (points
+            .iter()
+            .map(|p| f64::from(prim.surface_distance(*p).min(cap)))
+            .sum::<f64>()
+            / points.len() as f64) as f32
     };
     let mut sample_distances: Vec<f32> = prim
         .sample_surface(cfg.score_samples.max(1))
@@ -308,7 +362,11 @@ fn measure(prim: &Primitive, points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, cf
         })
         .collect();
     sample_distances.sort_by(f32::total_cmp);
-    Measured { primitive: *prim, data_to_model, sample_distances }
+    Measured {
+        primitive: *prim,
+        data_to_model,
+        sample_distances,
+    }
 }
 
 /// The best candidate by score (a capsule's score raised by `capsule_penalty`); among those
@@ -316,7 +374,11 @@ fn measure(prim: &Primitive, points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, cf
 /// [`PrimitiveKind`]), then the lower score, then the earlier one.
 fn choose(candidates: &[Candidate], tie_tolerance: f32, capsule_penalty: f32) -> Option<Candidate> {
     let effective = |c: &Candidate| {
-        if c.primitive.kind == PrimitiveKind::Capsule { c.score * (1.0 + capsule_penalty.max(0.0)) } else { c.score }
+        if c.primitive.kind == PrimitiveKind::Capsule {
+            c.score * (1.0 + capsule_penalty.max(0.0))
+        } else {
+            c.score
+        }
     };
     let best = candidates.iter().map(effective).fold(f32::INFINITY, f32::min);
     if !best.is_finite() {
@@ -326,7 +388,12 @@ fn choose(candidates: &[Candidate], tie_tolerance: f32, capsule_penalty: f32) ->
     candidates
         .iter()
         .filter(|c| effective(c) <= bar)
-        .min_by(|a, b| a.primitive.kind.cmp(&b.primitive.kind).then(effective(a).total_cmp(&effective(b))))
+        .min_by(|a, b| {
+            a.primitive
+                .kind
+                .cmp(&b.primitive.kind)
+                .then(effective(a).total_cmp(&effective(b)))
+        })
         .copied()
 }
 
@@ -337,8 +404,17 @@ fn near_points(prim: &Primitive, points: &[Vec3]) -> Vec<Vec3> {
     let mut scratch = dist.clone();
     let median = quantile_in_place(&mut scratch, 0.5).unwrap_or(0.0);
     let limit = (8.0 * median).max(0.05 * prim.size.max_element()).max(0.005);
-    let kept: Vec<Vec3> = points.iter().zip(&dist).filter(|(_, d)| **d <= limit).map(|(p, _)| *p).collect();
-    if kept.len() * 2 < points.len() { points.to_vec() } else { kept }
+    let kept: Vec<Vec3> = points
+        .iter()
+        .zip(&dist)
+        .filter(|(_, d)| **d <= limit)
+        .map(|(p, _)| *p)
+        .collect();
+    if kept.len() * 2 < points.len() {
+        points.to_vec()
+    } else {
+        kept
+    }
 }
 
 /// Points whose mean distance to their `k` nearest neighbours (in `tree`) is not an outlier
@@ -355,7 +431,10 @@ fn drop_isolated(points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, k: usize, fact
     let mean_knn: Vec<f32> = points
         .iter()
         .map(|p| {
-            let found = tree.query(&p.to_array()).nearest_n::<SquaredEuclidean<f32>>(qty).execute();
+            let found = tree
+                .query(&p.to_array())
+                .nearest_n::<SquaredEuclidean<f32>>(qty)
+                .execute();
             // The first hit is the point itself (or a duplicate at distance 0).
             let others = found.len().saturating_sub(1).max(1);
             found.iter().skip(1).map(|r| r.distance.sqrt()).sum::<f32>() / others as f32
@@ -368,8 +447,17 @@ fn drop_isolated(points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, k: usize, fact
     let mut dev: Vec<f32> = mean_knn.iter().map(|d| (d - median).abs()).collect();
     let mad = quantile_in_place(&mut dev, 0.5).unwrap_or(0.0);
     let threshold = (median * factor).max(median + 6.0 * 1.4826 * mad).max(1e-6);
-    let kept: Vec<Vec3> = points.iter().zip(&mean_knn).filter(|(_, d)| **d <= threshold).map(|(p, _)| *p).collect();
-    if kept.len() * 4 < points.len() * 3 { (points.to_vec(), median) } else { (kept, median) }
+    let kept: Vec<Vec3> = points
+        .iter()
+        .zip(&mean_knn)
+        .filter(|(_, d)| **d <= threshold)
+        .map(|(p, _)| *p)
+        .collect();
+    if kept.len() * 4 < points.len() * 3 {
+        (points.to_vec(), median)
+    } else {
+        (kept, median)
+    }
 }
 
 #[cfg(test)]
@@ -404,7 +492,11 @@ mod tests {
 
     #[test]
     fn picks_a_cuboid_for_box_points() {
-        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::new(1.0, 0.0, 0.45), 0.0, 0.0, 0.4));
+        let truth = Primitive::new(
+            PrimitiveKind::Cuboid,
+            Vec3::new(0.5, 0.4, 0.9),
+            pose(Vec3::new(1.0, 0.0, 0.45), 0.0, 0.0, 0.4),
+        );
         let fit = fit_part(&noisy(&truth, 3000, 1), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cuboid);
         assert!((fit.primitive.center() - truth.center()).length() < 0.005);
@@ -422,17 +514,29 @@ mod tests {
 
     #[test]
     fn picks_a_cylinder_with_the_right_axis() {
-        let truth = Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.3, 0.3, 0.7), pose(Vec3::new(0.0, 2.0, 0.5), 0.5, 0.2, 0.0));
+        let truth = Primitive::new(
+            PrimitiveKind::Cylinder,
+            Vec3::new(0.3, 0.3, 0.7),
+            pose(Vec3::new(0.0, 2.0, 0.5), 0.5, 0.2, 0.0),
+        );
         let fit = fit_part(&noisy(&truth, 3000, 2), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cylinder, "{:?}", fit.candidates);
         let axis_err = line_angle_deg(fit.primitive.axes_world()[2], truth.axes_world()[2]);
         assert!(axis_err < 1.0, "{axis_err}°");
-        assert!((fit.primitive.size.x - 0.3).abs() < 0.006 && (fit.primitive.size.z - 0.7).abs() < 0.008, "{}", fit.primitive.size);
+        assert!(
+            (fit.primitive.size.x - 0.3).abs() < 0.006 && (fit.primitive.size.z - 0.7).abs() < 0.008,
+            "{}",
+            fit.primitive.size
+        );
     }
 
     #[test]
     fn picks_a_sphere_for_sphere_points() {
-        let truth = Primitive::new(PrimitiveKind::Sphere, Vec3::splat(0.35), pose(Vec3::new(-1.0, 0.5, 1.0), 0.0, 0.0, 0.0));
+        let truth = Primitive::new(
+            PrimitiveKind::Sphere,
+            Vec3::splat(0.35),
+            pose(Vec3::new(-1.0, 0.5, 1.0), 0.0, 0.0, 0.0),
+        );
         let fit = fit_part(&noisy(&truth, 3000, 3), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Sphere, "{:?}", fit.candidates);
         assert!((fit.primitive.size.x - 0.35).abs() < 0.005, "{}", fit.primitive.size);
@@ -441,33 +545,57 @@ mod tests {
 
     #[test]
     fn picks_a_capsule_for_capsule_points() {
-        let truth = Primitive::new(PrimitiveKind::Capsule, Vec3::new(0.2, 0.2, 0.8), pose(Vec3::new(0.5, 0.5, 1.0), 1.2, 0.3, 0.0));
+        let truth = Primitive::new(
+            PrimitiveKind::Capsule,
+            Vec3::new(0.2, 0.2, 0.8),
+            pose(Vec3::new(0.5, 0.5, 1.0), 1.2, 0.3, 0.0),
+        );
         let fit = fit_part(&noisy(&truth, 3000, 5), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Capsule, "{:?}", fit.candidates);
         assert!(line_angle_deg(fit.primitive.axes_world()[2], truth.axes_world()[2]) < 1.0);
-        assert!((fit.primitive.size - truth.size).abs().max_element() < 0.008, "{}", fit.primitive.size);
+        assert!(
+            (fit.primitive.size - truth.size).abs().max_element() < 0.008,
+            "{}",
+            fit.primitive.size
+        );
     }
 
     #[test]
     fn thin_board_is_a_cuboid_with_the_right_thickness() {
-        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.6, 0.02, 0.8), pose(Vec3::new(0.3, 0.8, 0.5), 0.0, 0.0, 1.1));
+        let truth = Primitive::new(
+            PrimitiveKind::Cuboid,
+            Vec3::new(0.6, 0.02, 0.8),
+            pose(Vec3::new(0.3, 0.8, 0.5), 0.0, 0.0, 1.1),
+        );
         let fit = fit_part(&noisy(&truth, 3000, 4), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cuboid, "{:?}", fit.candidates);
         let thickness = fit.primitive.size.min_element();
         assert!((thickness - 0.02).abs() < 0.005, "{}", fit.primitive.size);
         // The thin axis is the board's normal.
         let [x, y, z] = fit.primitive.axes_world();
-        let thin = [x, y, z][fit.primitive.size.to_array().iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |m| m.0)];
+        let thin = [x, y, z][fit
+            .primitive
+            .size
+            .to_array()
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(0, |m| m.0)];
         assert!(line_angle_deg(thin, truth.axes_world()[1]) < 1.0);
     }
 
     /// Adds σ = 2 mm noise and 1 % outliers to `pts`.
-    fn noisy_points(pts: Vec<Vec3>, seed: u64) -> Vec<Vec3> {
+    fn noisy_points(pts: &[Vec3], seed: u64) -> Vec<Vec3> {
         let mut r = rng(seed);
         let noise = Normal::new(0.0_f32, 0.002).expect("valid sigma");
-        let mut out: Vec<Vec3> =
-            pts.iter().map(|p| *p + Vec3::new(noise.sample(&mut r), noise.sample(&mut r), noise.sample(&mut r))).collect();
-        let (lo, hi) = pts.iter().fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(l, h), p| (l.min(*p), h.max(*p)));
+        let mut out: Vec<Vec3> = pts
+            .iter()
+            .map(|p| *p + Vec3::new(noise.sample(&mut r), noise.sample(&mut r), noise.sample(&mut r)))
+            .collect();
+        let (lo, hi) = pts.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(l, h), p| (l.min(*p), h.max(*p)),
+        );
         for _ in 0..pts.len() / 100 {
             let t = Vec3::new(r.random(), r.random(), r.random());
             let idx = r.random_range(0..out.len());
@@ -479,7 +607,11 @@ mod tests {
     #[test]
     fn partial_scan_of_a_cabinet_is_a_cuboid_of_the_right_size() {
         // Seen from one corner: only the +x, +y and +z faces.
-        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::new(1.0, 0.0, 0.45), 0.0, 0.0, 0.4));
+        let truth = Primitive::new(
+            PrimitiveKind::Cuboid,
+            Vec3::new(0.5, 0.4, 0.9),
+            pose(Vec3::new(1.0, 0.0, 0.45), 0.0, 0.0, 0.4),
+        );
         let h = truth.size * 0.5;
         let visible: Vec<Vec3> = truth
             .sample_surface(5000)
@@ -489,9 +621,13 @@ mod tests {
                 (q - h).abs().min_element() < 1e-5
             })
             .collect();
-        let fit = fit_part(&noisy_points(visible, 11), &FitConfig::default(), None).expect("fits");
+        let fit = fit_part(&noisy_points(&visible, 11), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cuboid, "{:?}", fit.candidates);
-        assert!((fit.primitive.center() - truth.center()).length() < 0.01, "{}", fit.primitive.center());
+        assert!(
+            (fit.primitive.center() - truth.center()).length() < 0.01,
+            "{}",
+            fit.primitive.center()
+        );
         let mut got = fit.primitive.size.to_array();
         let mut want = truth.size.to_array();
         got.sort_by(f32::total_cmp);
@@ -504,7 +640,11 @@ mod tests {
     #[test]
     fn partial_scan_of_a_cylinder_is_a_cylinder() {
         // Seen from the side and above: the half side facing +x and the top cap.
-        let truth = Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.3, 0.3, 0.7), pose(Vec3::new(0.0, 2.0, 0.35), 0.0, 0.0, 0.0));
+        let truth = Primitive::new(
+            PrimitiveKind::Cylinder,
+            Vec3::new(0.3, 0.3, 0.7),
+            pose(Vec3::new(0.0, 2.0, 0.35), 0.0, 0.0, 0.0),
+        );
         let visible: Vec<Vec3> = truth
             .sample_surface(5000)
             .into_iter()
@@ -513,16 +653,29 @@ mod tests {
                 q.x > 0.0 || q.z > 0.35 - 1e-5
             })
             .collect();
-        let fit = fit_part(&noisy_points(visible, 12), &FitConfig::default(), None).expect("fits");
+        let fit = fit_part(&noisy_points(&visible, 12), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cylinder, "{:?}", fit.candidates);
         assert!(line_angle_deg(fit.primitive.axes_world()[2], Vec3::Z) < 2.0);
-        assert!((fit.primitive.size.x - 0.3).abs() < 0.01 && (fit.primitive.size.z - 0.7).abs() < 0.01, "{}", fit.primitive.size);
+        assert!(
+            (fit.primitive.size.x - 0.3).abs() < 0.01 && (fit.primitive.size.z - 0.7).abs() < 0.01,
+            "{}",
+            fit.primitive.size
+        );
     }
 
     #[test]
     fn forced_kind_is_respected() {
-        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.3), pose(Vec3::ZERO, 0.0, 0.0, 0.0));
-        let fit = fit_part(&truth.sample_surface(800), &FitConfig::default(), Some(PrimitiveKind::Sphere)).expect("fits");
+        let truth = Primitive::new(
+            PrimitiveKind::Cuboid,
+            Vec3::new(0.5, 0.4, 0.3),
+            pose(Vec3::ZERO, 0.0, 0.0, 0.0),
+        );
+        let fit = fit_part(
+            &truth.sample_surface(800),
+            &FitConfig::default(),
+            Some(PrimitiveKind::Sphere),
+        )
+        .expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Sphere);
         assert!(fit.candidates.iter().all(|c| c.primitive.kind == PrimitiveKind::Sphere));
     }
@@ -530,19 +683,30 @@ mod tests {
     #[test]
     fn bad_inputs_are_errors() {
         let three = [Vec3::ZERO, Vec3::X, Vec3::Y];
-        assert_eq!(fit_part(&three, &FitConfig::default(), None), Err(FitError::TooFewPoints { got: 3, min: 10 }));
+        assert_eq!(
+            fit_part(&three, &FitConfig::default(), None),
+            Err(FitError::TooFewPoints { got: 3, min: 10 })
+        );
         let msg = FitError::TooFewPoints { got: 3, min: 10 }.to_string();
         assert!(msg.contains('3') && msg.contains("10"), "{msg}");
         let mut pts = Primitive::cuboid_at(Vec3::ZERO, Vec3::ONE).sample_surface(100);
         pts[7] = Vec3::new(0.0, f32::NAN, 0.0);
-        assert!(matches!(fit_part(&pts, &FitConfig::default(), None), Err(FitError::NonFinite { index: 7, .. })));
+        assert!(matches!(
+            fit_part(&pts, &FitConfig::default(), None),
+            Err(FitError::NonFinite { index: 7, .. })
+        ));
         let same = vec![Vec3::ONE; 50];
-        assert!(matches!(fit_part(&same, &FitConfig::default(), None), Err(FitError::Degenerate { .. })));
+        assert!(matches!(
+            fit_part(&same, &FitConfig::default(), None),
+            Err(FitError::Degenerate { .. })
+        ));
     }
 
     #[test]
     fn planar_patch_fits_without_panicking() {
-        let pts: Vec<Vec3> = (0..400).map(|i| Vec3::new((i % 20) as f32 * 0.02, (i / 20) as f32 * 0.03, 0.7)).collect();
+        let pts: Vec<Vec3> = (0..400)
+            .map(|i| Vec3::new((i % 20) as f32 * 0.02, (i / 20) as f32 * 0.03, 0.7))
+            .collect();
         let fit = fit_part(&pts, &FitConfig::default(), None).expect("fits");
         assert!(fit.fit_error < 0.003, "{}", fit.fit_error);
     }
@@ -553,15 +717,35 @@ mod tests {
     #[ignore = "timing; run in release by hand"]
     fn timing_per_part() {
         let parts = [
-            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::ZERO, 0.0, 0.0, 0.4)),
-            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.6, 0.02, 0.8), pose(Vec3::ZERO, 0.0, 0.0, 1.1)),
-            Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.3, 0.3, 0.7), pose(Vec3::ZERO, 0.5, 0.2, 0.0)),
-            Primitive::new(PrimitiveKind::Sphere, Vec3::splat(0.35), pose(Vec3::ZERO, 0.0, 0.0, 0.0)),
+            Primitive::new(
+                PrimitiveKind::Cuboid,
+                Vec3::new(0.5, 0.4, 0.9),
+                pose(Vec3::ZERO, 0.0, 0.0, 0.4),
+            ),
+            Primitive::new(
+                PrimitiveKind::Cuboid,
+                Vec3::new(0.6, 0.02, 0.8),
+                pose(Vec3::ZERO, 0.0, 0.0, 1.1),
+            ),
+            Primitive::new(
+                PrimitiveKind::Cylinder,
+                Vec3::new(0.3, 0.3, 0.7),
+                pose(Vec3::ZERO, 0.5, 0.2, 0.0),
+            ),
+            Primitive::new(
+                PrimitiveKind::Sphere,
+                Vec3::splat(0.35),
+                pose(Vec3::ZERO, 0.0, 0.0, 0.0),
+            ),
         ];
-        let clouds: Vec<Vec<Vec3>> = parts.iter().enumerate().map(|(i, p)| noisy(p, 3000, i as u64)).collect();
+        let clouds: Vec<Vec<Vec3>> = parts
+            .iter()
+            .enumerate()
+            .map(|(i, p)| noisy(p, 3000, i as u64))
+            .collect();
         let cfg = FitConfig::default();
         for (cloud, part) in clouds.iter().zip(&parts) {
-            let reps = if std::env::var("FIT_DEBUG").is_ok() { 1 } else { 50 };
+            let reps = 50;
             let t0 = std::time::Instant::now();
             let mut kind = None;
             for _ in 0..reps {
@@ -573,193 +757,94 @@ mod tests {
             for _ in 0..reps {
                 let _ = min_volume_obb(cloud);
             }
-            eprintln!("  obb alone: {:.3} ms", t0.elapsed().as_secs_f64() * 1000.0 / f64::from(reps));
+            eprintln!(
+                "  obb alone: {:.3} ms",
+                t0.elapsed().as_secs_f64() * 1000.0 / f64::from(reps)
+            );
         }
     }
 
+    /// Random cuboids, cylinders and spheres (1.5–80 cm extents, any pose), every other one seen
+    /// from a single random viewpoint (visible surface only), σ = 2 mm noise and 1 % outliers:
+    /// the kind must be right and every extent and the centre within 1 cm, in all but 1 % of the
+    /// cases. Slow in a debug build:
+    /// `cargo test --release --no-default-features --lib fit::select::tests::robustness -- --ignored`
     #[test]
-    #[ignore = "debug"]
-    fn debug_iterations() {
-        let parts = [
-            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::ZERO, 0.0, 0.0, 0.4)),
-            Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.3, 0.3, 0.7), pose(Vec3::ZERO, 0.5, 0.2, 0.0)),
-        ];
-        let cfg = FitConfig::default();
-        for part in &parts {
-            let cloud = noisy(part, 3000, 1);
-            let obb = min_volume_obb(&cloud);
-            let sel = subsample_stride(&cloud, 400);
-            for t in templates(&obb, None, &cfg.kinds) {
-                let t0 = std::time::Instant::now();
-                let r = icp_align(&t, &sel, &cfg.icp);
-                let _ = ();
-                eprintln!("{:?}: {} it, err {:.4}, {:.3} ms", t.kind, r.iterations, r.mean_error, t0.elapsed().as_secs_f64() * 1e3);
-            }
-            let t0 = std::time::Instant::now();
-            let r = icp_align(&templates(&obb, None, &cfg.kinds)[0], &subsample_stride(&cloud, 1500), &cfg.icp);
-            eprintln!("final: {} it, {:.3} ms", r.iterations, t0.elapsed().as_secs_f64() * 1e3);
-        }
-    }
-
-    #[test]
-    #[ignore = "debug"]
-    fn stage_timing() {
-        let parts = [
-            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::ZERO, 0.0, 0.0, 0.4)),
-            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.6, 0.02, 0.8), pose(Vec3::ZERO, 0.0, 0.0, 1.1)),
-            Primitive::new(PrimitiveKind::Sphere, Vec3::splat(0.35), pose(Vec3::ZERO, 0.0, 0.0, 0.0)),
-        ];
-        let cfg = FitConfig::default();
-        let reps = 30;
-        for part in &parts {
-            let cloud = noisy(part, 3000, 1);
-            let fit_set = subsample_stride(&cloud, 1500);
-            let coords: Vec<[f32; 3]> = fit_set.iter().map(|p| p.to_array()).collect();
-            let t = std::time::Instant::now();
-            for _ in 0..reps { let _ = ImmutableKdTree::<f32, 3>::new_from_slice(&coords); }
-            let tree_ms = t.elapsed().as_secs_f64() * 1e3 / f64::from(reps);
-            let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&coords).expect("tree");
-            let t = std::time::Instant::now();
-            let mut kept = Vec::new();
-            let sel_raw = subsample_stride(&fit_set, 300);
-            for _ in 0..reps { kept = drop_isolated(&sel_raw, &tree, 4, 3.0).0; }
-            let filter_ms = t.elapsed().as_secs_f64() * 1e3 / f64::from(reps);
-            for k in [1usize, 2, 3, 5, 9] {
-                let t = std::time::Instant::now();
-                let mut acc = 0.0;
-                for _ in 0..reps {
-                    for p in &fit_set {
-                        if k == 1 {
-                            acc += tree.query(&p.to_array()).nearest_one::<SquaredEuclidean<f32>>().execute().distance;
-                        } else {
-                            let r = tree.query(&p.to_array()).nearest_n::<SquaredEuclidean<f32>>(NonZero::new(k).expect("k")).execute();
-                            acc += r[r.len() - 1].distance;
-                        }
-                    }
-                }
-                eprintln!("  k={k}: {:.3} ms ({acc})", t.elapsed().as_secs_f64() * 1e3 / f64::from(reps));
-            }
-            let t = std::time::Instant::now();
-            let mut obb = min_volume_obb(&kept);
-            for _ in 0..reps { obb = min_volume_obb(&kept); }
-            let obb_ms = t.elapsed().as_secs_f64() * 1e3 / f64::from(reps);
-            let sel = kept.clone();
-            let t = std::time::Instant::now();
-            for _ in 0..reps { for tp in templates(&obb, None, &cfg.kinds) { let _ = measure(&tp, &sel, &tree, &cfg).score(0.5, 0.5); } }
-            let score_ms = t.elapsed().as_secs_f64() * 1e3 / f64::from(reps) / 8.0;
-            let (hull_v, hull_t) = parry3d::transformation::try_convex_hull(&kept).map(|(v, t)| (v.len(), t.len())).unwrap_or((0, 0));
-            eprintln!("{:?}: tree {tree_ms:.3} filter {filter_ms:.3} ({} kept) obb {obb_ms:.3} (hull {hull_v} v {hull_t} f) score/cand {score_ms:.3}", part.kind, kept.len());
-        }
-    }
-
-    #[test]
-    #[ignore = "debug"]
-    fn icp_cost() {
-        let part = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::ZERO, 0.0, 0.0, 0.4));
-        let cloud = subsample_stride(&noisy(&part, 3000, 1), 250);
-        for kind in PrimitiveKind::ALL {
-            for refit in [false, true] {
-                let cfg = IcpConfig { refit_size: refit, max_iterations: 10, min_rotation_step_rad: 0.0, min_translation_step_m: 0.0, ..IcpConfig::default() };
-                let start = Primitive::new(kind, part.size, part.world_from_primitive);
-                let reps = 200;
-                let t = std::time::Instant::now();
-                for _ in 0..reps { let _ = icp_align(&start, &cloud, &cfg); }
-                eprintln!("{kind:?} refit {refit}: {:.2} us/iteration", t.elapsed().as_secs_f64() * 1e6 / f64::from(reps) / 10.0);
-            }
-        }
-        let t = std::time::Instant::now();
-        for _ in 0..1000 { let _ = part.sample_surface(128); }
-        eprintln!("sample_surface(128): {:.2} us", t.elapsed().as_secs_f64() * 1e3);
-    }
-
-    #[test]
-    #[ignore = "debug"]
-    fn score_cost() {
-        let part = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.6, 0.02, 0.8), pose(Vec3::ZERO, 0.0, 0.0, 1.1));
-        let cloud = noisy(&part, 3000, 1);
-        let fit_set = subsample_stride(&cloud, 1500);
-        let coords: Vec<[f32; 3]> = fit_set.iter().map(|p| p.to_array()).collect();
-        let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&coords).expect("tree");
-        let sel = subsample_stride(&fit_set, 300);
-        let obb = min_volume_obb(&sel);
-        let cfg = FitConfig::default();
-        for tp in templates(&obb, None, &cfg.kinds) {
-            let samples = tp.sample_surface(128);
-            let reps = 200;
-            let t = std::time::Instant::now();
-            let mut acc = 0.0;
-            for _ in 0..reps { for s in &samples { acc += tree.query(&s.to_array()).nearest_one::<SquaredEuclidean<f32>>().execute().distance; } }
-            let a = t.elapsed().as_secs_f64() * 1e6 / f64::from(reps);
-            let t = std::time::Instant::now();
-            for _ in 0..reps { for s in &samples { acc += tree.query(&s.to_array()).nearest_n::<SquaredEuclidean<f32>>(NonZero::new(1).expect("1")).within(0.0025).execute().first().map_or(0.0025, |r| r.distance); } }
-            let b = t.elapsed().as_secs_f64() * 1e6 / f64::from(reps);
-            let t = std::time::Instant::now();
-            for _ in 0..reps { acc += measure(&tp, &sel, &tree, &cfg).score(0.5, 0.5); }
-            let c = t.elapsed().as_secs_f64() * 1e6 / f64::from(reps);
-            eprintln!("{:?} size {}: nearest_one {a:.1} us, bounded {b:.1} us, score {c:.1} us ({acc})", tp.kind, tp.size);
-        }
-    }
-
-    #[test]
-    #[ignore = "debug sweep"]
-    fn sweep() {
-        let mut r = rng(std::env::var("SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(77));
-        let mut fails = 0;
-        let mut total = 0;
-        for trial in 0..std::env::var("TRIALS").ok().and_then(|s| s.parse().ok()).unwrap_or(40u64) {
-            for kind in PrimitiveKind::ALL {
-                let size = Vec3::new(r.random_range(0.015..0.8), r.random_range(0.015..0.8), r.random_range(0.015..0.8));
-                let p = pose(Vec3::new(r.random_range(-2.0..2.0), r.random_range(-2.0..2.0), r.random_range(0.0..2.0)), r.random_range(-3.0..3.0), r.random_range(-3.0..3.0), r.random_range(-3.0..3.0));
-                let truth = Primitive::new(kind, size, p);
+    #[ignore = "slow; run in release by hand"]
+    fn robustness_sweep() {
+        let mut r = rng(77);
+        let mut failures = Vec::new();
+        for trial in 0..100u64 {
+            for kind in [PrimitiveKind::Cuboid, PrimitiveKind::Cylinder, PrimitiveKind::Sphere] {
+                let size = Vec3::new(
+                    r.random_range(0.015..0.8),
+                    r.random_range(0.015..0.8),
+                    r.random_range(0.015..0.8),
+                );
+                let centre = Vec3::new(
+                    r.random_range(-2.0..2.0),
+                    r.random_range(-2.0..2.0),
+                    r.random_range(0.0..2.0),
+                );
+                let truth = Primitive::new(
+                    kind,
+                    size,
+                    pose(
+                        centre,
+                        r.random_range(-3.0..3.0),
+                        r.random_range(-3.0..3.0),
+                        r.random_range(-3.0..3.0),
+                    ),
+                );
                 let partial = trial % 2 == 1;
-                let view = Vec3::new(r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(0.2..1.0)).normalize();
-                let pts: Vec<Vec3> = truth.sample_surface(3000).into_iter().filter(|q| {
-                    if !partial { return true; }
-                    // Keep points whose outward direction faces the viewer (approximate visibility).
-                    let c = truth.closest_surface_point(*q);
-                    let n = truth.ray_cast(c + view * 0.5, -view, 1.0).map_or(Vec3::ZERO, |hit| hit.1);
-                    n.dot(view) > 0.0 && (truth.ray_cast(c + view * 5.0, -view, 10.0).map_or(0.0, |h| h.0) - 5.0).abs() < 1e-3
-                }).collect();
-                if pts.len() < 50 { continue; }
-                if std::env::var("TRIAL").is_ok_and(|t| t == format!("{trial}{kind:?}")) && kind == PrimitiveKind::Cuboid {
-                    let h = truth.size * 0.5;
-                    let mut counts = [0usize; 6];
-                    for q in &pts {
-                        let l = truth.world_from_primitive.inverse_transform_point(*q);
-                        for k in 0..3 {
-                            if (l[k] - h[k]).abs() < 1e-4 { counts[2 * k] += 1; }
-                            if (l[k] + h[k]).abs() < 1e-4 { counts[2 * k + 1] += 1; }
-                        }
-                    }
-                    eprintln!("trial {trial} face counts {counts:?} view {view} truth {truth:?} axes {:?}", truth.axes_world());
+                let view = Vec3::new(
+                    r.random_range(-1.0..1.0),
+                    r.random_range(-1.0..1.0),
+                    r.random_range(0.2..1.0),
+                )
+                .normalize();
+                // Visible: the first hit of a ray from the viewer's side is the point itself.
+                let visible = |q: &Vec3| {
+                    truth
+                        .ray_cast(*q + view * 5.0, -view, 10.0)
+                        .is_some_and(|hit| (hit.0 - 5.0).abs() < 1e-3)
+                };
+                let pts: Vec<Vec3> = truth
+                    .sample_surface(3000)
+                    .into_iter()
+                    .filter(|q| !partial || visible(q))
+                    .collect();
+                if pts.len() < 50 {
+                    continue;
                 }
-                let pts = noisy_points(pts, trial);
-                if let Ok(t) = std::env::var("TRIAL") { if t != format!("{trial}{kind:?}") { continue; } }
-                total += 1;
-                match fit_part(&pts, &FitConfig::default(), None) {
-                    Ok(fit) => {
-                        let vol_ratio = fit.primitive.volume() / truth.volume();
-                        let mut a = fit.primitive.size.to_array();
-                        let mut b = truth.size.to_array();
-                        a.sort_by(f32::total_cmp);
-                        b.sort_by(f32::total_cmp);
-                        let size_err = a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max);
-                        let centre_err = (fit.primitive.center() - truth.center()).length();
-                        if fit.primitive.kind != kind || size_err > 0.01 || centre_err > 0.01 {
-                            fails += 1;
-                            eprintln!("trial {trial} partial {partial} {kind:?} size {} -> {:?} size {} (vol ratio {vol_ratio:.2}, size err {size_err:.3}, centre err {centre_err:.3}, fit_error {:.4})", truth.size, fit.primitive.kind, fit.primitive.size, fit.fit_error);
-                        }
-                    }
-                    Err(e) => { fails += 1; eprintln!("trial {trial} {kind:?}: {e}"); }
+                let pts = noisy_points(&pts, trial);
+                let fit = fit_part(&pts, &FitConfig::default(), None).expect("fits");
+                let mut got = fit.primitive.size.to_array();
+                let mut want = truth.size.to_array();
+                got.sort_by(f32::total_cmp);
+                want.sort_by(f32::total_cmp);
+                let size_err = got.iter().zip(want).map(|(g, w)| (g - w).abs()).fold(0.0, f32::max);
+                let centre_err = (fit.primitive.center() - truth.center()).length();
+                if fit.primitive.kind != kind || size_err > 0.01 || centre_err > 0.01 {
+                    failures.push(format!(
+                        "trial {trial} (partial {partial}) {kind:?} {} -> {:?} {} (size error {size_err:.3}, centre error {centre_err:.3})",
+                        truth.size, fit.primitive.kind, fit.primitive.size
+                    ));
                 }
             }
         }
-        eprintln!("{fails} / {total} off");
+        // Known misses: small round parts seen from one side (a 5 cm cylinder's half side is
+        // within noise of a box's two faces; ties go to the cuboid).
+        assert!(failures.len() <= 3, "{} of 300 off: {failures:#?}", failures.len());
     }
 
     #[test]
     fn is_deterministic() {
-        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::ZERO, 0.1, 0.0, 0.4));
+        let truth = Primitive::new(
+            PrimitiveKind::Cuboid,
+            Vec3::new(0.5, 0.4, 0.9),
+            pose(Vec3::ZERO, 0.1, 0.0, 0.4),
+        );
         let pts = noisy(&truth, 2000, 9);
         let a = fit_part(&pts, &FitConfig::default(), None).expect("fits");
         let b = fit_part(&pts, &FitConfig::default(), None).expect("fits");

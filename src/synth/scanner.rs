@@ -60,12 +60,12 @@ pub struct ScannerConfig {
 }
 
 impl Default for ScannerConfig {
-    /// A hand-held-sensor-like partial scan: 8 viewpoints per room at 1.2–1.8 m, 208 × 156 rays
+    /// A hand-held-sensor-like partial scan: 14 viewpoints per room at 1.2–1.8 m, 208 × 156 rays
     /// each over a 60° field of view, 5 m range, 1.5 mm/m depth noise, 15 % bleed near part
     /// borders, 0.2 % outliers.
     fn default() -> Self {
         Self {
-            viewpoints: 8,
+            viewpoints: 14,
             tile_size_m: 6.5,
             image_width: 208,
             image_height: 156,
@@ -326,7 +326,15 @@ fn cameras(truth: &GroundTruth, cfg: &ScannerConfig, seed: u64) -> Vec<Camera> {
             let k = i % groups.len();
             let g = groups[k];
             let revisit = i >= groups.len();
-            let base = bases[k] + if revisit && dist(&g) < 1.5 { std::f32::consts::PI } else { 0.0 };
+            // A revisit looks from the other side at central groups, and from 50° to the side
+            // (alternating) at groups against a wall, as a person walking past them would.
+            let side = if (i / groups.len()) % 2 == 1 { 0.87 } else { -0.87 };
+            let base = bases[k]
+                + match (revisit, dist(&g) < 1.5) {
+                    (false, _) => 0.0,
+                    (true, true) => std::f32::consts::PI,
+                    (true, false) => side,
+                };
             let c = 0.5 * (g.lo + g.hi);
             let reach = 0.5 * g.diagonal();
             let fit = reach / fit_tan;
