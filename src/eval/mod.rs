@@ -483,6 +483,30 @@ mod tests {
     }
 
     #[test]
+    fn a_part_the_scan_never_saw_is_not_scored_but_reported() {
+        let truth = cabinet_truth();
+        let mut model = model_from_truth(&truth);
+        model.parts.retain(|p| p.id != 5);
+        model.joints.retain(|j| j.child != 5);
+        let m = evaluate(&model, &truth);
+        let o = &m.objects[0];
+        assert_eq!(o.unobserved_parts, vec![5]);
+        assert!(o.missing_parts.is_empty());
+        assert_eq!(m.summary.joint_type_accuracy, Some(1.0));
+        assert_eq!(m.summary.unobserved_parts, 1);
+    }
+
+    #[test]
+    fn a_reversed_edge_is_scored_as_the_same_joint() {
+        let truth = cabinet_truth();
+        let mut model = model_from_truth(&truth);
+        let fixed = model.joints.iter_mut().find(|j| j.kind == JointKind::Fixed).expect("a fixed joint");
+        std::mem::swap(&mut fixed.parent, &mut fixed.child);
+        let m = evaluate(&model, &truth);
+        assert_eq!(m.summary.joint_type_accuracy, Some(1.0));
+    }
+
+    #[test]
     fn joint_errors_and_wrong_types_are_measured() {
         let truth = cabinet_truth();
         let mut model = model_from_truth(&truth);
@@ -495,6 +519,7 @@ mod tests {
         model.joints[2].kind = JointKind::Revolute;
         model.parts.retain(|p| p.id != 5);
         model.joints.retain(|j| j.child != 5);
+        model.skipped_parts = vec![5]; // in the scan, lost by fitting
         let m = evaluate(&model, &truth);
         let o = &m.objects[0];
         assert_eq!(o.missing_parts, vec![5]);

@@ -114,7 +114,7 @@ fn doors_hinge_on_their_edge_and_open_outwards() {
     for seed in 0..4 {
         let truth = demo_room(seed);
         for o in &truth.objects {
-            for j in o.joints.iter().filter(|j| j.kind == JointKind::Revolute) {
+            for j in o.joints.iter().filter(|j| j.kind == JointKind::Revolute && part(o, j.child).label != "knob") {
                 revolute += 1;
                 let door = part(o, j.child).shapes[0];
                 let body = part(o, j.parent).shapes[0];
@@ -231,7 +231,7 @@ fn demo_scan_is_deterministic_and_labels_every_part() {
     }
     assert_eq!(first.background, again.background);
     let n = first.point_count();
-    assert!((150_000..=300_000).contains(&n), "{n} points");
+    assert!((300_000..=550_000).contains(&n), "{n} points");
     assert!(first.background.len() > 10_000);
     // Parts sorted; labels and objects from the truth.
     assert!(first.parts.windows(2).all(|w| w[0].id < w[1].id));
