@@ -50,11 +50,7 @@ fn process_id() -> u32 {
 /// complete new one, never a partial write; on failure the temporary file is removed.
 pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
     let Some(file_name) = path.file_name() else {
-        return Err(IoError::new(
-            path,
-            "write",
-            std::io::Error::new(ErrorKind::InvalidInput, "the path names no file"),
-        ));
+        return Err(IoError::new(path, "write", std::io::Error::new(ErrorKind::InvalidInput, "the path names no file")));
     };
     let folder = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
@@ -128,10 +124,7 @@ mod tests {
         assert_eq!(fs::read(&path).unwrap(), b"first");
         atomic_write(&path, b"second, longer").unwrap();
         assert_eq!(fs::read(&path).unwrap(), b"second, longer");
-        let names: Vec<_> = fs::read_dir(dir.path())
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
+        let names: Vec<_> = fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
         assert_eq!(names, vec!["out.txt".to_owned()], "no temp files left behind");
     }
 

@@ -5,10 +5,10 @@
 //! scene → exports. See `ARCHITECTURE.md` for the module map and invariants.
 
 pub mod contact;
+pub mod eval;
 pub mod export;
 pub mod fit;
 pub mod io;
-pub mod eval;
 pub mod kinematics;
 pub mod math;
 pub mod model;
@@ -18,6 +18,6 @@ pub mod refine;
 pub mod report;
 pub mod scan;
 pub mod scene;
-pub mod tree;
 pub mod synth;
+pub mod tree;
 pub mod truth;

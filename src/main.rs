@@ -72,7 +72,11 @@ impl Bars {
     fn new(enabled: bool) -> Self {
         let bar = (enabled && std::io::IsTerminal::is_terminal(&std::io::stderr())).then(|| {
             let b = ProgressBar::new(0);
-            b.set_style(ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} parts ({elapsed})").unwrap_or_else(|_| ProgressStyle::default_bar()).progress_chars("=> "));
+            b.set_style(
+                ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} parts ({elapsed})")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar())
+                    .progress_chars("=> "),
+            );
             b
         });
         Self { bar }
@@ -141,7 +145,10 @@ fn reconstruct_cmd(scan_path: &Path, out: &Path, json: bool) -> Result<()> {
     scene.warnings.splice(0..0, scan_warnings);
     write_outputs(out, &scene)?;
     if json {
-        println!("{}", serde_json::json!({"out": out, "objects": scene.objects.len(), "parts": scene.parts.len(), "joints": scene.joints.len(), "warnings": scene.warnings, "seconds": secs}));
+        println!(
+            "{}",
+            serde_json::json!({"out": out, "objects": scene.objects.len(), "parts": scene.parts.len(), "joints": scene.joints.len(), "warnings": scene.warnings, "seconds": secs})
+        );
     } else {
         print_warnings(&scene);
         println!("{}: {}", scan_path.display(), summary(&scene, secs));

@@ -56,15 +56,12 @@ pub fn kabsch_rotation(from: &[Vec3], to: &[Vec3], weights: Option<&[f32]>) -> Q
     let q = [vectors[0][best], vectors[1][best], vectors[2][best], vectors[3][best]];
     // Horn's quaternion is (w, x, y, z).
     let quat = Quat::from_xyzw(q[1] as f32, q[2] as f32, q[3] as f32, q[0] as f32);
-    if quat.length_squared() < 1e-12 {
-        Quat::IDENTITY
-    } else {
-        quat.normalize()
-    }
+    if quat.length_squared() < 1e-12 { Quat::IDENTITY } else { quat.normalize() }
 }
 
 /// Eigen decomposition of a symmetric 4×4 matrix by cyclic Jacobi rotations.
 /// Returns (eigenvalues, eigenvectors as columns).
+#[allow(clippy::needless_range_loop)] // (p, q, k) index math reads like the textbook algorithm
 fn jacobi_eigen4(mut a: [[f64; 4]; 4]) -> ([f64; 4], [[f64; 4]; 4]) {
     let mut v = [[0.0; 4]; 4];
     for (i, row) in v.iter_mut().enumerate() {
@@ -149,7 +146,7 @@ pub fn rpy_to_quat(rpy: [f64; 3]) -> Quat {
     glam::DQuat::from_euler(glam::EulerRot::ZYX, rpy[2], rpy[1], rpy[0]).as_quat()
 }
 
-/// A deterministic random generator for a seed (ChaCha8: stable across platforms and versions).
+/// A deterministic random generator for a seed (`ChaCha8`: stable across platforms and versions).
 #[must_use]
 pub fn rng(seed: u64) -> rand_chacha::ChaCha8Rng {
     use rand::SeedableRng;

@@ -78,7 +78,8 @@ pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &d
         .par_iter()
         .map(|part| {
             let forced = edits.primitive_kind.get(&part.id).copied();
-            let r = fit_part(&part.points, cfg, forced).map(|fit| if forced.is_none() { prefer_box_for_boards(&part.label, &part.points, fit) } else { fit });
+            let r = fit_part(&part.points, cfg, forced)
+                .map(|fit| if forced.is_none() { prefer_box_for_boards(&part.label, &part.points, fit) } else { fit });
             progress.update("fit", done.fetch_add(1, Ordering::Relaxed) + 1, total);
             match r {
                 Ok(fit) => Ok(PartModel {
@@ -177,7 +178,21 @@ fn is_box_like(label: &str) -> bool {
     label_tokens(label).any(|t| {
         matches!(
             t.as_str(),
-            "body" | "door" | "drawer" | "lid" | "top" | "shelf" | "seat" | "back" | "frame" | "base" | "mattress" | "headboard" | "panel" | "board" | "cabinet"
+            "body"
+                | "door"
+                | "drawer"
+                | "lid"
+                | "top"
+                | "shelf"
+                | "seat"
+                | "back"
+                | "frame"
+                | "base"
+                | "mattress"
+                | "headboard"
+                | "panel"
+                | "board"
+                | "cabinet"
         )
     })
 }
@@ -189,7 +204,9 @@ fn prefer_box_for_boards(label: &str, points: &[Vec3], fit: crate::fit::PartFit)
     if fit.primitive.kind == PrimitiveKind::Cuboid || !is_box_like(label) {
         return fit;
     }
-    let Some(cuboid) = fit.candidates.iter().filter(|c| c.primitive.kind == PrimitiveKind::Cuboid).min_by(|a, b| a.score.total_cmp(&b.score)) else {
+    let Some(cuboid) =
+        fit.candidates.iter().filter(|c| c.primitive.kind == PrimitiveKind::Cuboid).min_by(|a, b| a.score.total_cmp(&b.score))
+    else {
         return fit;
     };
     if cuboid.score > fit.score * 1.25 {
@@ -218,6 +235,9 @@ pub enum FloorHint<'a> {
     Height(f32),
 }
 
+/// One object after its contact graph, tree and refinement.
+type ObjectStage = (ObjectId, PartTree, BTreeMap<PartId, Primitive>, RefineStats, Vec<Warning>);
+
 /// Everything after fitting: contact graph, tree, refinement, scene graph, joints.
 /// Returns the scene and what refinement changed.
 #[must_use]
@@ -234,7 +254,7 @@ pub fn assemble(
         by_object.entry(p.object).or_default().push(p);
     }
     // Per object: contact graph → tree → refinement (parallel over objects, in order).
-    let per_object: Vec<(ObjectId, PartTree, BTreeMap<PartId, Primitive>, RefineStats, Vec<Warning>)> = by_object
+    let per_object: Vec<ObjectStage> = by_object
         .par_iter()
         .map(|(&obj, parts)| {
             let view: Vec<TreePart> = parts.iter().map(|p| TreePart { id: p.id, label: &p.label, primitive: &p.primitive }).collect();
@@ -275,11 +295,8 @@ pub fn assemble(
         }
     }
     joints.sort_by_key(|j| j.child);
-    let mut parts: Vec<PartModel> = fitted
-        .parts
-        .iter()
-        .map(|p| PartModel { primitive: final_prims.get(&p.id).copied().unwrap_or(p.primitive), ..p.clone() })
-        .collect();
+    let mut parts: Vec<PartModel> =
+        fitted.parts.iter().map(|p| PartModel { primitive: final_prims.get(&p.id).copied().unwrap_or(p.primitive), ..p.clone() }).collect();
     parts.sort_by_key(|p| p.id);
     let objects = scene_objects
         .iter()

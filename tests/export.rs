@@ -113,7 +113,7 @@ fn scene_json_round_trips() {
 #[cfg(feature = "sim")]
 #[test]
 fn urdf_loads_into_rapier_as_a_multibody() {
-    use rapier3d_urdf::rapier3d::prelude::*;
+    use rapier3d::prelude::*;
     use rapier3d_urdf::{UrdfLoaderOptions, UrdfMultibodyOptions, UrdfRobot};
     let s = scene();
     let text = scene_urdf(&s, &UrdfConfig::default()).expect("urdf");
@@ -127,7 +127,12 @@ fn urdf_loads_into_rapier_as_a_multibody() {
     assert_eq!(parsed.joints.len(), s.parts.len());
     let mut world = PhysicsWorld::new();
     world.gravity = Vector::new(0.0, 0.0, -9.81);
-    let handles = robot.insert_using_multibody_joints(&mut world.bodies, &mut world.colliders, &mut world.multibody_joints, UrdfMultibodyOptions::DISABLE_SELF_CONTACTS);
+    let handles = robot.insert_using_multibody_joints(
+        &mut world.bodies,
+        &mut world.colliders,
+        &mut world.multibody_joints,
+        UrdfMultibodyOptions::DISABLE_SELF_CONTACTS,
+    );
     assert!(handles.joints.iter().filter(|j| j.joint.is_some()).count() >= s.joints.len());
     // A few physics steps stay finite.
     for _ in 0..20 {

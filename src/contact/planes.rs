@@ -7,7 +7,7 @@
 //! 16-gon (the real cap of a cylinder), and curved sides keep their tangent box faces so a knob or
 //! a rod lying on a board still registers its contact.
 
-use crate::math::{Vec3};
+use crate::math::Vec3;
 use crate::primitive::{Primitive, PrimitiveKind};
 
 /// A planar face of a primitive, in world coordinates.

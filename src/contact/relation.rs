@@ -52,20 +52,20 @@ pub struct PairContact {
     pub child_face: usize,
 }
 
-/// Align(π_p, π_c) = |n_pᵀ n_c|.
+/// `Align(π_p, π_c) = |n_pᵀ n_c|`.
 #[must_use]
 pub fn align(p: &SurfacePlane, c: &SurfacePlane) -> f32 {
     p.normal.dot(c.normal).abs()
 }
 
-/// Dist(π_p, π_c): |mean over the child's outline of n_pᵀu + d_p|.
+/// `Dist(π_p, π_c)`: the absolute mean, over the child's outline `U_c`, of `n_pᵀu + d_p`.
 #[must_use]
 pub fn plane_distance(p: &SurfacePlane, c: &SurfacePlane) -> f32 {
     let n = c.outline.len().max(1) as f32;
     (c.outline.iter().map(|u| p.signed_distance(*u)).sum::<f32>() / n).abs()
 }
 
-/// Cont(U_p, U_c) = A(U_p ∩ proj_p(U_c)) / A(U_c).
+/// `Cont(U_p, U_c) = A(U_p ∩ proj_p(U_c)) / A(U_c)`.
 #[must_use]
 pub fn contact_ratio(p: &SurfacePlane, c: &SurfacePlane) -> f32 {
     if c.area <= 0.0 || p.outline.len() < 3 {
@@ -165,7 +165,11 @@ mod tests {
     fn tilted_child_fails_alignment() {
         let a = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.5), Vec3::splat(1.0));
         let q = crate::math::Quat::from_rotation_x(0.5);
-        let b = Primitive::new(crate::primitive::PrimitiveKind::Cuboid, Vec3::splat(0.2), crate::math::Pose::from_parts(Vec3::new(0.0, 0.0, 1.12), q));
+        let b = Primitive::new(
+            crate::primitive::PrimitiveKind::Cuboid,
+            Vec3::splat(0.2),
+            crate::math::Pose::from_parts(Vec3::new(0.0, 0.0, 1.12), q),
+        );
         assert!(contact(&a, &b, &cfg()).is_none());
     }
 

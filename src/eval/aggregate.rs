@@ -29,7 +29,13 @@ pub fn evaluate_baseline(scan: &Scan, truth: &GroundTruth) -> BaselineMetrics {
 impl fmt::Display for BaselineMetrics {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let show = |v: Option<f32>| v.map_or_else(|| "-".to_owned(), |v| format!("{v:.3}"));
-        write!(f, "mean Chamfer {}, mean IoU {} over {} objects", show(self.summary.mean_chamfer), show(self.summary.mean_iou), self.summary.objects)
+        write!(
+            f,
+            "mean Chamfer {}, mean IoU {} over {} objects",
+            show(self.summary.mean_chamfer),
+            show(self.summary.mean_iou),
+            self.summary.objects
+        )
     }
 }
 
@@ -54,7 +60,7 @@ pub struct Aggregate {
     pub object_level_chamfer: Option<f32>,
     pub part_level_iou: Option<f32>,
     pub object_level_iou: Option<f32>,
-    /// Runs in which part-level beats object-level on both Chamfer and IoU.
+    /// Runs in which part-level beats object-level on both Chamfer and `IoU`.
     pub runs_part_level_wins_both: usize,
 }
 
@@ -104,11 +110,37 @@ impl fmt::Display for Aggregate {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let show = |v: Option<f32>, d: usize| v.map_or_else(|| "-".to_owned(), |v| format!("{v:.d$}"));
         let pct = |v: Option<f32>| v.map_or_else(|| "-".to_owned(), |v| format!("{:.1}%", 100.0 * v));
-        writeln!(f, "joint type accuracy: {} ({}/{}); movable: {} ({}/{})", pct(self.joint_type_accuracy), self.correct_types, self.joints, pct(self.movable_type_accuracy), self.movable_correct_types, self.movable_joints)?;
-        writeln!(f, "axis error: median {}°, max {}° over {} joints; hinge line distance median {} m", show(self.median_axis_error_deg, 2), show(self.max_axis_error_deg, 2), self.axes_measured, show(self.median_hinge_distance_m, 3))?;
+        writeln!(
+            f,
+            "joint type accuracy: {} ({}/{}); movable: {} ({}/{})",
+            pct(self.joint_type_accuracy),
+            self.correct_types,
+            self.joints,
+            pct(self.movable_type_accuracy),
+            self.movable_correct_types,
+            self.movable_joints
+        )?;
+        writeln!(
+            f,
+            "axis error: median {}°, max {}° over {} joints; hinge line distance median {} m",
+            show(self.median_axis_error_deg, 2),
+            show(self.max_axis_error_deg, 2),
+            self.axes_measured,
+            show(self.median_hinge_distance_m, 3)
+        )?;
         writeln!(f, "kinematic-edge mAP: mean {} (lowest run {})", show(self.map, 3), show(self.min_run_map, 3))?;
-        writeln!(f, "Chamfer (lower is better): part-level {} vs object-level {}", show(self.part_level_chamfer, 3), show(self.object_level_chamfer, 3))?;
-        writeln!(f, "IoU (higher is better):    part-level {} vs object-level {}", show(self.part_level_iou, 3), show(self.object_level_iou, 3))?;
+        writeln!(
+            f,
+            "Chamfer (lower is better): part-level {} vs object-level {}",
+            show(self.part_level_chamfer, 3),
+            show(self.object_level_chamfer, 3)
+        )?;
+        writeln!(
+            f,
+            "IoU (higher is better):    part-level {} vs object-level {}",
+            show(self.part_level_iou, 3),
+            show(self.object_level_iou, 3)
+        )?;
         write!(f, "part-level beats object-level on both in {}/{} runs", self.runs_part_level_wins_both, self.runs)
     }
 }

@@ -73,11 +73,7 @@ pub const TEMPLATES: &[Template] = &[
     },
     Template {
         name: "bed",
-        boxes: &[
-            cuboid(0.0, 0.0, -0.3, 1.0, 1.0, 0.4),
-            cuboid(0.0, 0.04, 0.0, 1.0, 0.92, 0.2),
-            cuboid(0.0, -0.46, 0.0, 1.0, 0.08, 1.0),
-        ],
+        boxes: &[cuboid(0.0, 0.0, -0.3, 1.0, 1.0, 0.4), cuboid(0.0, 0.04, 0.0, 1.0, 0.92, 0.2), cuboid(0.0, -0.46, 0.0, 1.0, 0.08, 1.0)],
     },
     Template {
         name: "desk",
@@ -125,16 +121,12 @@ pub struct TemplateFit {
 /// Objects without points get an empty primitive list.
 #[must_use]
 pub fn object_level_baseline(scan: &Scan) -> Vec<(ObjectId, Vec<Primitive>)> {
-    let mut by_object: std::collections::BTreeMap<ObjectId, Vec<Vec3>> =
-        scan.objects.keys().map(|id| (*id, Vec::new())).collect();
+    let mut by_object: std::collections::BTreeMap<ObjectId, Vec<Vec3>> = scan.objects.keys().map(|id| (*id, Vec::new())).collect();
     for part in &scan.parts {
         by_object.entry(part.object).or_default().extend_from_slice(&part.points);
     }
     let objects: Vec<(ObjectId, Vec<Vec3>)> = by_object.into_iter().collect();
-    objects
-        .par_iter()
-        .map(|(id, points)| (*id, fit_template(points).map(|f| f.primitives).unwrap_or_default()))
-        .collect()
+    objects.par_iter().map(|(id, points)| (*id, fit_template(points).map(|f| f.primitives).unwrap_or_default())).collect()
 }
 
 /// Fits every template in every quarter turn to an object's points; the best fit, or `None` when
@@ -184,11 +176,7 @@ pub fn place_template(template: &Template, bounds: &UprightBox, quarter_turns: u
     let turn = f32::from(quarter_turns % 4) * std::f32::consts::FRAC_PI_2;
     let world_from_template = Quat::from_rotation_z(bounds.yaw_rad + turn);
     // An odd turn puts the template's x along the box's y: scale it by the box's y extent.
-    let scale = if quarter_turns.is_multiple_of(2) {
-        bounds.size_m
-    } else {
-        Vec3::new(bounds.size_m.y, bounds.size_m.x, bounds.size_m.z)
-    };
+    let scale = if quarter_turns.is_multiple_of(2) { bounds.size_m } else { Vec3::new(bounds.size_m.y, bounds.size_m.x, bounds.size_m.z) };
     template
         .boxes
         .iter()
@@ -256,8 +244,7 @@ fn convex_hull_2d(mut points: Vec<Vec2>) -> Vec<Vec2> {
     let mut hull: Vec<Vec2> = Vec::with_capacity(2 * points.len());
     for pass in 0..2 {
         let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &Vec2>> =
-            if pass == 0 { Box::new(points.iter()) } else { Box::new(points.iter().rev()) };
+        let iter: Box<dyn Iterator<Item = &Vec2>> = if pass == 0 { Box::new(points.iter()) } else { Box::new(points.iter().rev()) };
         for p in iter {
             while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], *p) <= 0.0 {
                 hull.pop();
@@ -277,10 +264,8 @@ mod tests {
     /// Surface samples of cuboids (centre, size) in an object frame, placed at `center` with `yaw`.
     fn object_points(boxes: &[(Vec3, Vec3)], center: Vec3, yaw: f32, n: usize) -> Vec<Vec3> {
         let r = Quat::from_rotation_z(yaw);
-        let prims: Vec<Primitive> = boxes
-            .iter()
-            .map(|(c, s)| Primitive::new(PrimitiveKind::Cuboid, *s, Pose::from_parts(center + r * *c, r)))
-            .collect();
+        let prims: Vec<Primitive> =
+            boxes.iter().map(|(c, s)| Primitive::new(PrimitiveKind::Cuboid, *s, Pose::from_parts(center + r * *c, r))).collect();
         sample_shapes(&prims, n)
     }
 
@@ -295,10 +280,8 @@ mod tests {
 
     fn chair_boxes() -> Vec<(Vec3, Vec3)> {
         // 0.5 × 0.5 × 0.9 m: legs to 0.45 m, seat 0.45–0.5 m, back on -x side up to 0.9 m.
-        let mut boxes = vec![
-            (Vec3::new(0.0, 0.0, 0.025), Vec3::new(0.5, 0.5, 0.05)),
-            (Vec3::new(-0.23, 0.0, 0.25), Vec3::new(0.04, 0.5, 0.4)),
-        ];
+        let mut boxes =
+            vec![(Vec3::new(0.0, 0.0, 0.025), Vec3::new(0.5, 0.5, 0.05)), (Vec3::new(-0.23, 0.0, 0.25), Vec3::new(0.04, 0.5, 0.4))];
         for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
             boxes.push((Vec3::new(sx * 0.23, sy * 0.23, -0.225), Vec3::new(0.04, 0.04, 0.45)));
         }

@@ -105,8 +105,7 @@ impl UnitBox {
             hi = hi.max(b);
         }
         let largest_extent_m = (hi - lo).max_element();
-        (largest_extent_m.is_finite() && largest_extent_m > 1e-9)
-            .then_some(Self { center_world: 0.5 * (lo + hi), largest_extent_m })
+        (largest_extent_m.is_finite() && largest_extent_m > 1e-9).then_some(Self { center_world: 0.5 * (lo + hi), largest_extent_m })
     }
 
     fn to_unit(self, world: Vec3) -> Vec3 {
@@ -155,10 +154,8 @@ pub(crate) fn mean_nearest_distance(queries: &[[f32; 3]], targets: &[[f32; 3]]) 
         return None;
     }
     let tree = kiddo::ImmutableKdTree::<f32, 3>::new_from_slice(targets).ok()?;
-    let sum: f64 = queries
-        .iter()
-        .map(|q| f64::from(tree.query(q).nearest_one::<kiddo::SquaredEuclidean<f32>>().execute().distance.sqrt()))
-        .sum();
+    let sum: f64 =
+        queries.iter().map(|q| f64::from(tree.query(q).nearest_one::<kiddo::SquaredEuclidean<f32>>().execute().distance.sqrt())).sum();
     Some((sum / queries.len() as f64) as f32)
 }
 
@@ -205,13 +202,11 @@ pub fn voxel_iou(predicted: &[Primitive], truth: &[Primitive], resolution: usize
             for i in ranges[0].0..=ranges[0].1 {
                 for j in ranges[1].0..=ranges[1].1 {
                     for k in ranges[2].0..=ranges[2].1 {
-                        let idx = ((i - lat_lo[0]) as usize * dims[1] + (j - lat_lo[1]) as usize) * dims[2]
-                            + (k - lat_lo[2]) as usize;
+                        let idx = ((i - lat_lo[0]) as usize * dims[1] + (j - lat_lo[1]) as usize) * dims[2] + (k - lat_lo[2]) as usize;
                         if grid[idx] {
                             continue;
                         }
-                        let centre_unit =
-                            Vec3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5) * pitch - Vec3::splat(half_side);
+                        let centre_unit = Vec3::new(i as f32 + 0.5, j as f32 + 0.5, k as f32 + 0.5) * pitch - Vec3::splat(half_side);
                         if s.contains(unit.to_world(centre_unit)) {
                             grid[idx] = true;
                         }
@@ -289,11 +284,7 @@ mod tests {
     #[test]
     fn iou_of_identical_shapes_is_one() {
         let shapes = [
-            Primitive::new(
-                PrimitiveKind::Cuboid,
-                Vec3::new(1.0, 0.5, 0.3),
-                Pose::from_parts(Vec3::ZERO, Quat::from_rotation_z(0.7)),
-            ),
+            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(1.0, 0.5, 0.3), Pose::from_parts(Vec3::ZERO, Quat::from_rotation_z(0.7))),
             Primitive::new(PrimitiveKind::Sphere, Vec3::splat(0.4), Pose::from_translation(Vec3::Z * 0.3)),
         ];
         let iou = voxel_iou(&shapes, &shapes, VOXEL_RESOLUTION).expect("iou");

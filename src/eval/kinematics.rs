@@ -100,7 +100,8 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
             let part_missing = model.part(t.child).is_none();
             // The model's joint between the same two parts, in either direction (a tree may hang
             // a bed's frame off its headboard: the same kinematic edge); else the child's joint.
-            let same_pair = model.joints.iter().find(|j| (j.parent, j.child) == (t.parent, t.child) || (j.parent, j.child) == (t.child, t.parent));
+            let same_pair =
+                model.joints.iter().find(|j| (j.parent, j.child) == (t.parent, t.child) || (j.parent, j.child) == (t.child, t.parent));
             let predicted = if part_missing { None } else { same_pair.or_else(|| model.joint_of(t.child)) };
             let predicted_kind = predicted.map(|j| j.kind);
             let type_correct = predicted_kind == Some(t.kind);
@@ -108,19 +109,10 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
             if let Some(p) = predicted.filter(|_| type_correct && t.kind.is_movable()) {
                 axis_error_deg = Some(line_angle_deg(p.axis_world, t.axis_world));
                 if t.kind == JointKind::Revolute {
-                    hinge_distance_m =
-                        Some(line_line_distance(p.origin_world, p.axis_world, t.origin_world, t.axis_world));
+                    hinge_distance_m = Some(line_line_distance(p.origin_world, p.axis_world, t.origin_world, t.axis_world));
                 }
             }
-            JointRow {
-                child: t.child,
-                truth_kind: t.kind,
-                predicted_kind,
-                part_missing,
-                type_correct,
-                axis_error_deg,
-                hinge_distance_m,
-            }
+            JointRow { child: t.child, truth_kind: t.kind, predicted_kind, part_missing, type_correct, axis_error_deg, hinge_distance_m }
         })
         .collect()
 }

@@ -139,15 +139,19 @@ pub fn evaluate(model: &SceneModel, truth: &GroundTruth) -> Metrics {
                 correct_types: joints.iter().filter(|j| j.type_correct).count(),
                 movable_joints: movable.clone().count(),
                 movable_correct_types: movable.filter(|j| j.type_correct).count(),
-                missing_parts: t.parts.iter().map(|p| p.id).filter(|id| model.part(*id).is_none() && !unobserved_parts.contains(id)).collect(),
+                missing_parts: t
+                    .parts
+                    .iter()
+                    .map(|p| p.id)
+                    .filter(|id| model.part(*id).is_none() && !unobserved_parts.contains(id))
+                    .collect(),
                 unobserved_parts,
                 joints,
             }
         })
         .collect();
     let truth_ids: BTreeSet<ObjectId> = truth.objects.iter().map(|o| o.id).collect();
-    let model_ids: BTreeSet<ObjectId> =
-        model.objects.iter().map(|o| o.id).chain(model.parts.iter().map(|p| p.object)).collect();
+    let model_ids: BTreeSet<ObjectId> = model.objects.iter().map(|o| o.id).chain(model.parts.iter().map(|p| p.object)).collect();
     let unmatched = model_ids.difference(&truth_ids).copied().collect();
     let summary = summarise(&objects, unmatched);
     Metrics { source: model.source.clone(), objects, summary }
@@ -173,10 +177,7 @@ fn summarise(objects: &[ObjectRow], unmatched_model_objects: Vec<ObjectId>) -> S
         mean_chamfer: mean(&mut objects.iter().filter_map(|o| o.chamfer)),
         mean_iou: mean(&mut objects.iter().filter_map(|o| o.iou)),
         map: mean(&mut objects.iter().filter_map(|o| o.ap)),
-        map_by_category: by_category
-            .into_iter()
-            .filter_map(|(c, aps)| geometry::mean(aps.into_iter()).map(|m| (c, m)))
-            .collect(),
+        map_by_category: by_category.into_iter().filter_map(|(c, aps)| geometry::mean(aps.into_iter()).map(|m| (c, m))).collect(),
         objects_with_edges: objects.iter().filter(|o| o.ap.is_some()).count(),
         joints,
         correct_types,
@@ -220,10 +221,7 @@ impl Metrics {
     #[must_use]
     pub fn markdown_table(&self) -> String {
         let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "| object | category | parts (truth/model) | Chamfer ↓ | IoU ↑ | AP ↑ | joint types | mean axis err (°) |"
-        );
+        let _ = writeln!(s, "| object | category | parts (truth/model) | Chamfer ↓ | IoU ↑ | AP ↑ | joint types | mean axis err (°) |");
         let _ = writeln!(s, "|---:|---|---:|---:|---:|---:|---:|---:|");
         for o in &self.objects {
             let _ = writeln!(
@@ -252,13 +250,7 @@ impl Metrics {
         for (category, map) in &m.map_by_category {
             let _ = writeln!(s, "| mAP, {category} | {map:.3} |");
         }
-        let _ = writeln!(
-            s,
-            "| joint type accuracy ({}/{}) | {} |",
-            m.correct_types,
-            m.joints,
-            percent(m.joint_type_accuracy)
-        );
+        let _ = writeln!(s, "| joint type accuracy ({}/{}) | {} |", m.correct_types, m.joints, percent(m.joint_type_accuracy));
         let _ = writeln!(
             s,
             "| movable joint type accuracy ({}/{}) | {} |",
@@ -273,12 +265,7 @@ impl Metrics {
             opt(m.median_axis_error_deg, 2),
             opt(m.mean_axis_error_deg, 2)
         );
-        let _ = writeln!(
-            s,
-            "| hinge line distance, median (m, {} joints) | {} |",
-            m.hinges_measured,
-            opt(m.median_hinge_distance_m, 3)
-        );
+        let _ = writeln!(s, "| hinge line distance, median (m, {} joints) | {} |", m.hinges_measured, opt(m.median_hinge_distance_m, 3));
         let _ = writeln!(s, "| truth parts missing from the model | {} |", m.missing_parts);
         let _ = writeln!(s, "| truth parts the scan never saw (not scored) | {} |", m.unobserved_parts);
         s
@@ -290,10 +277,7 @@ impl Metrics {
 #[must_use]
 pub fn comparison_markdown(part_level: &Metrics, baseline: &[GeometryScore]) -> String {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "| object | category | Chamfer ↓ object-level | Chamfer ↓ part-level | IoU ↑ object-level | IoU ↑ part-level |"
-    );
+    let _ = writeln!(s, "| object | category | Chamfer ↓ object-level | Chamfer ↓ part-level | IoU ↑ object-level | IoU ↑ part-level |");
     let _ = writeln!(s, "|---:|---|---:|---:|---:|---:|");
     for o in &part_level.objects {
         let b = baseline.iter().find(|b| b.object == o.id);
@@ -372,8 +356,7 @@ impl fmt::Display for Metrics {
             opt(m.median_hinge_distance_m, 3)
         )?;
         if m.missing_parts > 0 {
-            let missing: Vec<String> =
-                self.objects.iter().flat_map(|o| o.missing_parts.iter().map(ToString::to_string)).collect();
+            let missing: Vec<String> = self.objects.iter().flat_map(|o| o.missing_parts.iter().map(ToString::to_string)).collect();
             writeln!(f, "truth parts missing from the model: {}", missing.join(", "))?;
         }
         if !m.unmatched_model_objects.is_empty() {
@@ -404,8 +387,7 @@ mod tests {
     /// along -y), handle 4 (fixed to the door), top 5 (fixed).
     fn cabinet_truth() -> GroundTruth {
         let body = cuboid(Vec3::new(0.0, 0.0, 0.4), Vec3::new(0.6, 0.4, 0.8));
-        let part =
-            |id: PartId, label: &str, shape: Primitive| TruthPart { id, label: label.into(), shapes: vec![shape] };
+        let part = |id: PartId, label: &str, shape: Primitive| TruthPart { id, label: label.into(), shapes: vec![shape] };
         let truth_object = TruthObject {
             id: 7,
             category: "cabinet".into(),
@@ -442,22 +424,14 @@ mod tests {
                 point_count: 100,
             })
             .collect();
-        let contact_edges = object
-            .joints
-            .iter()
-            .map(|j| ContactEdge { parent: j.parent, child: j.child, weight: 0.9, in_tree: true })
-            .collect();
+        let contact_edges =
+            object.joints.iter().map(|j| ContactEdge { parent: j.parent, child: j.child, weight: 0.9, in_tree: true }).collect();
         SceneModel {
             source: "test".into(),
             parts,
             joints: object.joints.clone(),
             contact_edges,
-            objects: vec![ObjectModel {
-                id: object.id,
-                category: object.category.clone(),
-                root_part: 1,
-                supported_by_part: None,
-            }],
+            objects: vec![ObjectModel { id: object.id, category: object.category.clone(), root_part: 1, supported_by_part: None }],
             ..SceneModel::default()
         }
     }

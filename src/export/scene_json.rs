@@ -89,7 +89,14 @@ pub fn scene_from_json(text: &str, path: &str) -> Result<SceneModel, SceneJsonEr
     let mut parts: Vec<PartModel> = doc
         .parts
         .into_iter()
-        .map(|p| PartModel { id: p.id, object: p.object, label: p.label, primitive: p.primitive, fit_error: p.fit_error, point_count: p.point_count })
+        .map(|p| PartModel {
+            id: p.id,
+            object: p.object,
+            label: p.label,
+            primitive: p.primitive,
+            fit_error: p.fit_error,
+            point_count: p.point_count,
+        })
         .collect();
     parts.sort_by_key(|p| p.id);
     Ok(SceneModel {

@@ -68,7 +68,10 @@ fn geometry(p: &Primitive) -> Vec<(f32, ur::Geometry)> {
         PrimitiveKind::Capsule => {
             let r = s.x * 0.5;
             let straight = (s.z - s.x).max(0.0);
-            let mut out = vec![(0.5 * straight, ur::Geometry::Sphere { radius: f64::from(r) }), (-0.5 * straight, ur::Geometry::Sphere { radius: f64::from(r) })];
+            let mut out = vec![
+                (0.5 * straight, ur::Geometry::Sphere { radius: f64::from(r) }),
+                (-0.5 * straight, ur::Geometry::Sphere { radius: f64::from(r) }),
+            ];
             if straight > 1e-6 {
                 out.insert(0, (0.0, ur::Geometry::Cylinder { radius: f64::from(r), length: f64::from(straight) }));
             }
@@ -104,7 +107,12 @@ pub fn scene_urdf_robot(scene: &SceneModel, cfg: &UrdfConfig) -> ur::Robot {
             let at = local.transform_point(Vec3::Z * dz);
             let o = pose(at, prim.rotation());
             let material_name = format!("mat_{}", sanitize(&part.label));
-            visual.push(ur::Visual { name: Some(format!("{}_v{k}", names[&part.id])), origin: o.clone(), geometry: geom.clone(), material: Some(ur::Material { name: material_name.clone(), color: None, texture: None }) });
+            visual.push(ur::Visual {
+                name: Some(format!("{}_v{k}", names[&part.id])),
+                origin: o.clone(),
+                geometry: geom.clone(),
+                material: Some(ur::Material { name: material_name.clone(), color: None, texture: None }),
+            });
             collision.push(ur::Collision { name: Some(format!("{}_c{k}", names[&part.id])), origin: o, geometry: geom });
             if !materials.iter().any(|m: &ur::Material| m.name == material_name) {
                 let rgba = label_color(&part.label);
@@ -118,7 +126,14 @@ pub fn scene_urdf_robot(scene: &SceneModel, cfg: &UrdfConfig) -> ur::Robot {
             inertial: ur::Inertial {
                 origin: pose(local.translation, prim.rotation()),
                 mass: ur::Mass { value: f64::from(mass) },
-                inertia: ur::Inertia { ixx: f64::from(inertia.x), ixy: 0.0, ixz: 0.0, iyy: f64::from(inertia.y), iyz: 0.0, izz: f64::from(inertia.z) },
+                inertia: ur::Inertia {
+                    ixx: f64::from(inertia.x),
+                    ixy: 0.0,
+                    ixz: 0.0,
+                    iyy: f64::from(inertia.y),
+                    iyz: 0.0,
+                    izz: f64::from(inertia.z),
+                },
             },
             visual,
             collision,

@@ -100,17 +100,10 @@ pub fn icp_align(initial: &Primitive, points: &[Vec3], cfg: &IcpConfig) -> IcpRe
     let mut prim = *initial;
     prim.size = prim.kind.normalize_size(prim.size);
     if points.is_empty() {
-        return IcpResult {
-            primitive: prim,
-            mean_error: 0.0,
-            iterations: 0,
-        };
+        return IcpResult { primitive: prim, mean_error: 0.0, iterations: 0 };
     }
     let trim = cfg.trim_fraction.clamp(0.0, 0.9);
-    let (lo, hi) = points.iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(l, h), p| (l.min(*p), h.max(*p)),
-    );
+    let (lo, hi) = points.iter().fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(l, h), p| (l.min(*p), h.max(*p)));
     let data_diameter = (hi - lo).length().max(MIN_EXTENT_M);
     let n = points.len();
     let mut local = vec![Vec3::ZERO; n];
@@ -140,11 +133,7 @@ pub fn icp_align(initial: &Primitive, points: &[Vec3], cfg: &IcpConfig) -> IcpRe
         let median = quantile_in_place(&mut scratch, 0.5).unwrap_or(0.0);
         // The objective tracked across iterations: the mean residual truncated at a cap fixed
         // on the first iteration (so every point counts, and strays count at most the cap).
-        let cap = *objective_cap.get_or_insert(
-            (3.0 * median)
-                .max(cfg.keep_within_rel * prim.size.max_element())
-                .max(1e-6),
-        );
+        let cap = *objective_cap.get_or_insert((3.0 * median).max(cfg.keep_within_rel * prim.size.max_element()).max(1e-6));
         let objective = resid.iter().map(|r| f64::from(r.min(cap))).sum::<f64>() / n as f64;
         match &best {
             Some(b) if objective >= b.0 * (1.0 - 1e-3) => stalled += 1,
@@ -162,20 +151,11 @@ pub fn icp_align(initial: &Primitive, points: &[Vec3], cfg: &IcpConfig) -> IcpRe
         // Trim the worst residuals, but never those below 3× the median or below a small
         // fraction of the part's size: on clean data the largest residuals are the informative
         // ones (the far ends of a rotation error, the edge faces of a board that slid).
-        let threshold = if trim > 0.0 {
-            q.max(3.0 * median).max(cfg.keep_within_rel * prim.size.max_element())
-        } else {
-            f32::INFINITY
-        };
+        let threshold = if trim > 0.0 { q.max(3.0 * median).max(cfg.keep_within_rel * prim.size.max_element()) } else { f32::INFINITY };
 
         // Rigid update: model (closest points) onto data (points), both in the primitive frame.
-        let update = if cfg.point_to_plane {
-            point_to_plane_update(&prim, &local, &closest, &resid, threshold)
-        } else {
-            None
-        };
-        let Some((rot, trans)) =
-            update.or_else(|| kabsch_update(prim.kind, &local, &closest, &resid, threshold, &mut from, &mut to))
+        let update = if cfg.point_to_plane { point_to_plane_update(&prim, &local, &closest, &resid, threshold) } else { None };
+        let Some((rot, trans)) = update.or_else(|| kabsch_update(prim.kind, &local, &closest, &resid, threshold, &mut from, &mut to))
         else {
             break;
         };
@@ -207,20 +187,14 @@ pub fn icp_align(initial: &Primitive, points: &[Vec3], cfg: &IcpConfig) -> IcpRe
         }
         // Converged when the whole iteration (rigid step and resize) barely changed anything.
         let rot_step = next.rotation().angle_between(prim.rotation());
-        let move_step = (next.center() - prim.center())
-            .length()
-            .max((next.size - prim.size).abs().max_element());
+        let move_step = (next.center() - prim.center()).length().max((next.size - prim.size).abs().max_element());
         converged = rot_step < cfg.min_rotation_step_rad && move_step < cfg.min_translation_step_m;
         prim = next;
     }
 
     let prim = best.map_or(prim, |b| b.1);
     let mean_error = points.iter().map(|p| f64::from(prim.surface_distance(*p))).sum::<f64>() / n as f64;
-    IcpResult {
-        primitive: prim,
-        mean_error: mean_error as f32,
-        iterations,
-    }
+    IcpResult { primitive: prim, mean_error: mean_error as f32, iterations }
 }
 
 /// Point-to-point update (Kabsch on the centred inlier pairs): the rotation and translation
@@ -269,13 +243,7 @@ fn kabsch_update(
 /// error (a board slides along its face by the few percent of points on its edges).
 /// `None` when the system is degenerate.
 #[allow(clippy::needless_range_loop)] // (row, column) index pairs of a symmetric 6×6 system
-fn point_to_plane_update(
-    prim: &Primitive,
-    local: &[Vec3],
-    closest: &[Vec3],
-    resid: &[f32],
-    threshold: f32,
-) -> Option<(Quat, Vec3)> {
+fn point_to_plane_update(prim: &Primitive, local: &[Vec3], closest: &[Vec3], resid: &[f32], threshold: f32) -> Option<(Quat, Vec3)> {
     let mut a = [[0.0_f64; 6]; 6];
     let mut b = [0.0_f64; 6];
     let mut count = 0usize;
@@ -348,11 +316,7 @@ fn surface_normal_local(prim: &Primitive, c: Vec3, p: Vec3) -> Vec3 {
         }
         PrimitiveKind::Cylinder => {
             let rho = Vec2::new(c.x, c.y).length();
-            if h.z - c.z.abs() < h.x - rho {
-                Vec3::Z * c.z.signum()
-            } else {
-                Vec3::new(c.x, c.y, 0.0).normalize_or(Vec3::X)
-            }
+            if h.z - c.z.abs() < h.x - rho { Vec3::Z * c.z.signum() } else { Vec3::new(c.x, c.y, 0.0).normalize_or(Vec3::X) }
         }
         PrimitiveKind::Sphere => c.normalize_or(Vec3::Z),
         PrimitiveKind::Capsule => {
@@ -417,11 +381,7 @@ impl FacePair {
         if !angle.is_finite() {
             return None;
         }
-        Some(if angle > 0.3 {
-            Quat::IDENTITY.slerp(q, 0.3 / angle)
-        } else {
-            q
-        })
+        Some(if angle > 0.3 { Quat::IDENTITY.slerp(q, 0.3 / angle) } else { q })
     }
 
     /// Median positions (the median: stray points are not trimmed away here, see
@@ -439,10 +399,7 @@ impl FacePair {
         };
         match (at(0), at(1)) {
             (Some((hi, mad_hi)), Some((lo, mad_lo))) if hi - lo <= 6.0 * mad_hi.max(mad_lo) => Faces::OneSurface,
-            (plus, minus) => Faces::Seen {
-                plus: plus.map(|p| p.0),
-                minus: minus.map(|m| m.0),
-            },
+            (plus, minus) => Faces::Seen { plus: plus.map(|p| p.0), minus: minus.map(|m| m.0) },
         }
     }
 }
@@ -479,16 +436,8 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                 buf.extend(pts.iter().map(|p| p[k]));
                 *r = rough_interval(&mut buf)?;
             }
-            let rc = Vec3::new(
-                rough[0].0 + rough[0].1,
-                rough[1].0 + rough[1].1,
-                rough[2].0 + rough[2].1,
-            ) * 0.5;
-            let rh = (Vec3::new(
-                rough[0].1 - rough[0].0,
-                rough[1].1 - rough[1].0,
-                rough[2].1 - rough[2].0,
-            ) * 0.5)
+            let rc = Vec3::new(rough[0].0 + rough[0].1, rough[1].0 + rough[1].1, rough[2].0 + rough[2].1) * 0.5;
+            let rh = (Vec3::new(rough[0].1 - rough[0].0, rough[1].1 - rough[1].0, rough[2].1 - rough[2].0) * 0.5)
                 .max(Vec3::splat(0.5 * MIN_EXTENT_M));
             let mut faces: [FacePair; 3] = Default::default();
             let mut assigned: Vec<(usize, usize)> = Vec::with_capacity(pts.len()); // (axis, side)
@@ -517,12 +466,7 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                         // Every point not on a seen face of this axis spreads over the axis'
                         // interval (points overhanging a too-small model included).
                         buf.clear();
-                        buf.extend(
-                            pts.iter()
-                                .zip(&assigned)
-                                .filter(|(_, (a, s))| *a != k || !seen[*s])
-                                .map(|(p, _)| p[k]),
-                        );
+                        buf.extend(pts.iter().zip(&assigned).filter(|(_, (a, s))| *a != k || !seen[*s]).map(|(p, _)| p[k]));
                         interval(plus, minus, &mut buf, rough[k], size[k], min_count)
                     }
                     // Not observable while the box is tilted against the surface: keep the
@@ -549,10 +493,7 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
             buf.clear();
             buf.extend(pts.iter().map(|p| p.z));
             let rough = rough_interval(&mut buf)?;
-            let (rcz, rhz) = (
-                0.5 * (rough.0 + rough.1),
-                (0.5 * (rough.1 - rough.0)).max(0.5 * MIN_EXTENT_M),
-            );
+            let (rcz, rhz) = (0.5 * (rough.0 + rough.1), (0.5 * (rough.1 - rough.0)).max(0.5 * MIN_EXTENT_M));
             let mut caps = FacePair::default();
             let mut side_xy = Vec::new();
             let mut lateral = Vec::new();
@@ -588,10 +529,7 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                     (-h.z, h.z)
                 }
             };
-            (
-                Vec3::new(2.0 * radius, 2.0 * radius, hi - lo),
-                Vec3::new(centre.x, centre.y, 0.5 * (lo + hi)),
-            )
+            (Vec3::new(2.0 * radius, 2.0 * radius, hi - lo), Vec3::new(centre.x, centre.y, 0.5 * (lo + hi)))
         }
         PrimitiveKind::Sphere => {
             let kept: Vec<Vec3> = pts.iter().zip(inlier).filter(|(_, ok)| **ok).map(|(p, _)| *p).collect();
@@ -623,16 +561,8 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                     ends.add(*p, p.z - lift * p.z.signum(), p.z < 0.0, rho2 < 0.25 * r * r);
                 }
             }
-            let fit = if side_xy.len() >= min_count {
-                circle_fit_gn(&side_xy, r)
-            } else {
-                None
-            };
-            let mean_radial = if radial_count > 0 {
-                (radial_sum / radial_count as f64) as f32
-            } else {
-                r
-            };
+            let fit = if side_xy.len() >= min_count { circle_fit_gn(&side_xy, r) } else { None };
+            let mean_radial = if radial_count > 0 { (radial_sum / radial_count as f64) as f32 } else { r };
             let (centre, radius) = fit.unwrap_or((Vec2::ZERO, mean_radial));
             let (lo, hi) = match ends.positions(min_count) {
                 Faces::Seen { plus, minus } => {
@@ -646,12 +576,7 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                     // biased by noise).
                     let axis = Vec3::new(centre.x, centre.y, 0.0);
                     let refine = |start: f32, sign: f32| {
-                        let cap: Vec<Vec3> = ends
-                            .points
-                            .iter()
-                            .filter(|p| p.z * sign > 0.0)
-                            .map(|p| *p - axis)
-                            .collect();
+                        let cap: Vec<Vec3> = ends.points.iter().filter(|p| p.z * sign > 0.0).map(|p| *p - axis).collect();
                         cap_end_fit(&cap, start, radius)
                     };
                     let plus = plus.map(|e| refine(e, 1.0));
@@ -661,10 +586,7 @@ fn refit_size(kind: PrimitiveKind, size: Vec3, pts: &[Vec3], inlier: &[bool]) ->
                 Faces::OneSurface => (-a, a),
             };
             let length = (hi - lo).max(0.0) + 2.0 * radius;
-            (
-                Vec3::new(2.0 * radius, 2.0 * radius, length),
-                Vec3::new(centre.x, centre.y, 0.5 * (lo + hi)),
-            )
+            (Vec3::new(2.0 * radius, 2.0 * radius, length), Vec3::new(centre.x, centre.y, 0.5 * (lo + hi)))
         }
     };
     // At most a factor of two per step; never below the minimum extent.
@@ -758,11 +680,7 @@ fn circle_fit_gn(pts: &[Vec2], r0: f32) -> Option<(Vec2, f32)> {
     // An arc narrower than ~60° (mean resultant length of the directions > 0.95) pins neither
     // the radius nor the centre: flat data would send the radius to infinity.
     let c = Vec2::new(cx as f32, cy as f32);
-    let resultant = pts
-        .iter()
-        .fold(Vec2::ZERO, |s, p| s + (*p - c).normalize_or_zero())
-        .length()
-        / pts.len().max(1) as f32;
+    let resultant = pts.iter().fold(Vec2::ZERO, |s, p| s + (*p - c).normalize_or_zero()).length() / pts.len().max(1) as f32;
     (r.is_finite() && r > 0.0 && resultant < 0.95).then_some((c, r as f32))
 }
 
@@ -800,11 +718,7 @@ fn sphere_fit_gn(pts: &[Vec3], r0: f32) -> Option<(Vec3, f32)> {
     }
     // A cap narrower than ~25° half-angle pins neither the radius nor the centre.
     let cf = c.as_vec3();
-    let resultant = pts
-        .iter()
-        .fold(Vec3::ZERO, |s, p| s + (*p - cf).normalize_or_zero())
-        .length()
-        / pts.len().max(1) as f32;
+    let resultant = pts.iter().fold(Vec3::ZERO, |s, p| s + (*p - cf).normalize_or_zero()).length() / pts.len().max(1) as f32;
     (r.is_finite() && r > 0.0 && c.is_finite() && resultant < 0.95).then_some((cf, r as f32))
 }
 
@@ -812,20 +726,9 @@ fn sphere_fit_gn(pts: &[Vec3], r0: f32) -> Option<(Vec3, f32)> {
 /// coordinates of the points on the other faces (`lateral`, uniform over the interval).
 /// `rough` (the data's own extent) stands in when there is no evidence at all; `span` (the
 /// current extent) when one face is seen and nothing else.
-fn interval(
-    plus: Option<f32>,
-    minus: Option<f32>,
-    lateral: &mut [f32],
-    rough: (f32, f32),
-    span: f32,
-    min_count: usize,
-) -> (f32, f32) {
+fn interval(plus: Option<f32>, minus: Option<f32>, lateral: &mut [f32], rough: (f32, f32), span: f32, min_count: usize) -> (f32, f32) {
     const Q: f32 = 0.005;
-    let lat = if lateral.len() >= min_count {
-        quantile_in_place(lateral, Q).zip(quantile_in_place(lateral, 1.0 - Q))
-    } else {
-        None
-    };
+    let lat = if lateral.len() >= min_count { quantile_in_place(lateral, Q).zip(quantile_in_place(lateral, 1.0 - Q)) } else { None };
     let (lo, hi) = match (minus, plus) {
         (Some(lo), Some(hi)) => (lo, hi),
         (None, Some(hi)) => (lat.map_or(hi - span, |(pl, _)| (pl - Q * hi) / (1.0 - Q)), hi),
@@ -857,10 +760,7 @@ mod tests {
         Primitive::new(
             PrimitiveKind::Cuboid,
             Vec3::new(0.6, 0.4, 0.8),
-            Pose::from_parts(
-                Vec3::new(1.0, -0.5, 0.4),
-                Quat::from_euler(glam::EulerRot::XYZ, 0.1, -0.2, 0.7),
-            ),
+            Pose::from_parts(Vec3::new(1.0, -0.5, 0.4), Quat::from_euler(glam::EulerRot::XYZ, 0.1, -0.2, 0.7)),
         )
     }
 
@@ -884,11 +784,7 @@ mod tests {
         let truth = true_box();
         let pts = truth.sample_surface(2000);
         for point_to_plane in [true, false] {
-            let cfg = IcpConfig {
-                point_to_plane,
-                max_iterations: 30,
-                ..IcpConfig::default()
-            };
+            let cfg = IcpConfig { point_to_plane, max_iterations: 30, ..IcpConfig::default() };
             let res = icp_align(&perturbed(&truth), &pts, &cfg);
             assert_pose_close(&res.primitive, &truth);
             assert!(res.mean_error < 1e-3, "{}", res.mean_error);
@@ -913,27 +809,16 @@ mod tests {
         assert_pose_close(&res.primitive, &truth);
         assert!(res.iterations < 20, "point-to-plane took {} iterations", res.iterations);
         // The point-to-point (Kabsch) update gets there too, more slowly.
-        let cfg = IcpConfig {
-            max_iterations: 40,
-            point_to_plane: false,
-            ..IcpConfig::default()
-        };
+        let cfg = IcpConfig { max_iterations: 40, point_to_plane: false, ..IcpConfig::default() };
         let res = icp_align(&perturbed(&truth), &pts, &cfg);
         assert_pose_close(&res.primitive, &truth);
         // With size re-estimation from a wrong initial size.
         let mut start = perturbed(&truth);
         start.size = truth.size * Vec3::new(1.1, 0.92, 1.05);
-        let cfg = IcpConfig {
-            refit_size: true,
-            ..IcpConfig::default()
-        };
+        let cfg = IcpConfig { refit_size: true, ..IcpConfig::default() };
         let res = icp_align(&start, &pts, &cfg);
         assert_pose_close(&res.primitive, &truth);
-        assert!(
-            (res.primitive.size - truth.size).abs().max_element() < 0.005,
-            "{}",
-            res.primitive.size
-        );
+        assert!((res.primitive.size - truth.size).abs().max_element() < 0.005, "{}", res.primitive.size);
     }
 
     #[test]
@@ -959,10 +844,7 @@ mod tests {
         let truth = Primitive::new(
             PrimitiveKind::Cuboid,
             Vec3::new(0.3, 0.6, 0.028),
-            Pose::from_parts(
-                Vec3::new(0.3, 0.8, 0.5),
-                Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.2, 1.1),
-            ),
+            Pose::from_parts(Vec3::new(0.3, 0.8, 0.5), Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.2, 1.1)),
         );
         let h = truth.size * 0.5;
         let pts: Vec<Vec3> = truth
@@ -975,39 +857,19 @@ mod tests {
             .collect();
         let mut r = rng(8);
         let noise = Normal::new(0.0_f32, 0.002).expect("valid sigma");
-        let pts: Vec<Vec3> = pts
-            .iter()
-            .step_by(6)
-            .map(|p| *p + Vec3::new(noise.sample(&mut r), noise.sample(&mut r), noise.sample(&mut r)))
-            .collect();
+        let pts: Vec<Vec3> =
+            pts.iter().step_by(6).map(|p| *p + Vec3::new(noise.sample(&mut r), noise.sample(&mut r), noise.sample(&mut r))).collect();
         for tilt_deg in [0.0_f32, 4.0] {
             // Thin start; tilted about the long axis (the minimal box of an L-shaped section is
             // ambiguous by up to atan(thickness / width)).
             let mut start = truth;
             start.size.z = 0.015;
             start.world_from_primitive.rotation = truth.rotation() * Quat::from_rotation_y(tilt_deg.to_radians());
-            let res = icp_align(
-                &start,
-                &pts,
-                &IcpConfig {
-                    refit_size: true,
-                    ..IcpConfig::default()
-                },
-            );
+            let res = icp_align(&start, &pts, &IcpConfig { refit_size: true, ..IcpConfig::default() });
             // Noise biases the extents of the unseen faces outwards by ~2σ (extreme percentiles).
-            assert!(
-                (res.primitive.size - truth.size).abs().max_element() < 0.008,
-                "tilt {tilt_deg}: {}",
-                res.primitive.size
-            );
-            assert!(
-                (res.primitive.center() - truth.center()).length() < 0.005,
-                "tilt {tilt_deg}"
-            );
-            assert!(
-                res.primitive.rotation().angle_between(truth.rotation()).to_degrees() < 0.5,
-                "tilt {tilt_deg}"
-            );
+            assert!((res.primitive.size - truth.size).abs().max_element() < 0.008, "tilt {tilt_deg}: {}", res.primitive.size);
+            assert!((res.primitive.center() - truth.center()).length() < 0.005, "tilt {tilt_deg}");
+            assert!(res.primitive.rotation().angle_between(truth.rotation()).to_degrees() < 0.5, "tilt {tilt_deg}");
         }
     }
 
@@ -1030,42 +892,24 @@ mod tests {
         let mut start = truth;
         start.size = Vec3::new(0.36, 0.36, 0.75);
         start.world_from_primitive.translation += Vec3::new(0.02, 0.0, -0.01);
-        let cfg = IcpConfig {
-            refit_size: true,
-            max_iterations: 30,
-            ..IcpConfig::default()
-        };
+        let cfg = IcpConfig { refit_size: true, max_iterations: 30, ..IcpConfig::default() };
         let res = icp_align(&start, &pts, &cfg);
         let got = res.primitive;
         assert!((got.size.x - 0.3).abs() < 0.006, "diameter {}", got.size.x);
         assert!((got.size.z - 0.7).abs() < 0.01, "height {}", got.size.z);
         let axis_err = crate::math::line_angle_deg(got.axes_world()[2], truth.axes_world()[2]);
         assert!(axis_err < 1.0, "{axis_err}°");
-        assert!(
-            crate::math::line_line_distance(got.center(), got.axes_world()[2], truth.center(), truth.axes_world()[2])
-                < 0.003
-        );
+        assert!(crate::math::line_line_distance(got.center(), got.axes_world()[2], truth.center(), truth.axes_world()[2]) < 0.003);
     }
 
     #[test]
     fn refits_a_sphere_from_a_hemisphere() {
-        let truth = Primitive::new(
-            PrimitiveKind::Sphere,
-            Vec3::splat(0.25),
-            Pose::from_translation(Vec3::new(0.0, 1.0, 2.0)),
-        );
+        let truth = Primitive::new(PrimitiveKind::Sphere, Vec3::splat(0.25), Pose::from_translation(Vec3::new(0.0, 1.0, 2.0)));
         let pts: Vec<Vec3> = truth.sample_surface(2000).into_iter().filter(|p| p.z > 2.0).collect();
         let mut start = truth;
         start.size = Vec3::splat(0.3);
         start.world_from_primitive.translation += Vec3::new(0.01, -0.02, 0.03);
-        let res = icp_align(
-            &start,
-            &pts,
-            &IcpConfig {
-                refit_size: true,
-                ..IcpConfig::default()
-            },
-        );
+        let res = icp_align(&start, &pts, &IcpConfig { refit_size: true, ..IcpConfig::default() });
         assert!((res.primitive.size.x - 0.25).abs() < 0.002, "{}", res.primitive.size);
         assert!((res.primitive.center() - truth.center()).length() < 0.002);
     }
@@ -1080,14 +924,7 @@ mod tests {
         pts.push(Vec3::NAN);
         let mut r = rng(1);
         pts.push(Vec3::new(r.random(), f32::INFINITY, 0.0));
-        let res = icp_align(
-            &truth,
-            &pts,
-            &IcpConfig {
-                refit_size: true,
-                ..IcpConfig::default()
-            },
-        );
+        let res = icp_align(&truth, &pts, &IcpConfig { refit_size: true, ..IcpConfig::default() });
         assert!(res.primitive.world_from_primitive.is_finite() && res.mean_error < 1e-3);
     }
 }

@@ -78,11 +78,7 @@ struct Oriented {
 pub fn min_volume_obb(points: &[Vec3]) -> Obb {
     let finite: Vec<Vec3> = points.iter().copied().filter(|p| p.is_finite()).collect();
     if finite.is_empty() {
-        return Obb {
-            center: Vec3::ZERO,
-            axes: Mat3::IDENTITY,
-            size: Vec3::splat(MIN_EXTENT_M),
-        };
+        return Obb { center: Vec3::ZERO, axes: Mat3::IDENTITY, size: Vec3::splat(MIN_EXTENT_M) };
     }
     let sample = subsample_stride(&finite, MAX_HULL_INPUT);
     let (centroid, pca) = principal_axes(&sample);
@@ -91,10 +87,7 @@ pub fn min_volume_obb(points: &[Vec3]) -> Obb {
     let (verts, mut normals) = hull_directions(&rel).unwrap_or_else(|| (rel.clone(), Vec::new()));
     normals.extend([pca.x_axis, pca.y_axis, pca.z_axis, Vec3::Z]);
 
-    let mut best = Oriented {
-        axes: pca,
-        volume: clamped_volume(&verts, &pca),
-    };
+    let mut best = Oriented { axes: pca, volume: clamped_volume(&verts, &pca) };
     for n in normals {
         if let Some(cand) = box_flush_with(&verts, n)
             && cand.volume < best.volume * (1.0 - 1e-6)
@@ -115,11 +108,7 @@ pub fn min_volume_obb(points: &[Vec3]) -> Obb {
 pub fn pca_obb(points: &[Vec3]) -> Obb {
     let finite: Vec<Vec3> = points.iter().copied().filter(|p| p.is_finite()).collect();
     if finite.is_empty() {
-        return Obb {
-            center: Vec3::ZERO,
-            axes: Mat3::IDENTITY,
-            size: Vec3::splat(MIN_EXTENT_M),
-        };
+        return Obb { center: Vec3::ZERO, axes: Mat3::IDENTITY, size: Vec3::splat(MIN_EXTENT_M) };
     }
     let (centroid, axes) = principal_axes(&finite);
     canonicalize(box_with_axes(&finite, centroid, axes))
@@ -131,11 +120,7 @@ pub fn axes_angle_deg(a: &Mat3, b: &Mat3) -> f32 {
     let bs = [b.x_axis, b.y_axis, b.z_axis];
     [a.x_axis, a.y_axis, a.z_axis]
         .iter()
-        .map(|u| {
-            bs.iter()
-                .map(|v| crate::math::line_angle_deg(*u, *v))
-                .fold(f32::INFINITY, f32::min)
-        })
+        .map(|u| bs.iter().map(|v| crate::math::line_angle_deg(*u, *v)).fold(f32::INFINITY, f32::min))
         .fold(0.0, f32::max)
 }
 
@@ -169,11 +154,7 @@ fn box_with_axes(points: &[Vec3], offset: Vec3, axes: Mat3) -> Obb {
         hi = hi.max(q);
     }
     let mid = 0.5 * (lo + hi);
-    Obb {
-        center: offset + axes * mid,
-        axes,
-        size: (hi - lo).max(Vec3::splat(MIN_EXTENT_M)),
-    }
+    Obb { center: offset + axes * mid, axes, size: (hi - lo).max(Vec3::splat(MIN_EXTENT_M)) }
 }
 
 /// Hull vertices and the distinct face directions of the hull (largest area first), or `None`
@@ -189,11 +170,7 @@ fn hull_directions(rel: &[Vec3]) -> Option<(Vec<Vec3>, Vec<Vec3>)> {
     // Faces by decreasing area (index as tie-break: deterministic).
     let mut faces: Vec<(f32, Vec3)> = Vec::with_capacity(tris.len());
     for t in &tris {
-        let (Some(a), Some(b), Some(c)) = (
-            verts.get(t[0] as usize),
-            verts.get(t[1] as usize),
-            verts.get(t[2] as usize),
-        ) else {
+        let (Some(a), Some(b), Some(c)) = (verts.get(t[0] as usize), verts.get(t[1] as usize), verts.get(t[2] as usize)) else {
             continue;
         };
         let n = (*b - *a).cross(*c - *a);
@@ -218,11 +195,7 @@ fn hull_directions(rel: &[Vec3]) -> Option<(Vec<Vec3>, Vec<Vec3>)> {
         }
     }
     clusters.sort_by(|x, y| y.2.total_cmp(&x.2));
-    let normals = clusters
-        .iter()
-        .take(MAX_FACE_NORMALS)
-        .map(|c| c.1.try_normalize().unwrap_or(c.0))
-        .collect();
+    let normals = clusters.iter().take(MAX_FACE_NORMALS).map(|c| c.1.try_normalize().unwrap_or(c.0)).collect();
     Some((verts, normals))
 }
 
@@ -254,10 +227,7 @@ fn box_flush_with(verts: &[Vec3], normal: Vec3) -> Option<Oriented> {
     let a1 = u * dir.x + v * dir.y;
     let a2 = u * -dir.y + v * dir.x;
     let axes = Mat3::from_cols(a1, a2, n);
-    Some(Oriented {
-        axes,
-        volume: clamped_volume(verts, &axes),
-    })
+    Some(Oriented { axes, volume: clamped_volume(verts, &axes) })
 }
 
 /// Convex hull of 2D points, counter-clockwise, no repeated or collinear vertices
@@ -413,11 +383,7 @@ fn canonicalize(obb: Obb) -> Obb {
         z = x.cross(y);
         sz = size[order[2]];
     }
-    Obb {
-        center: obb.center,
-        axes: Mat3::from_cols(x, y, z),
-        size: Vec3::new(sx, sy, sz),
-    }
+    Obb { center: obb.center, axes: Mat3::from_cols(x, y, z), size: Vec3::new(sx, sy, sz) }
 }
 
 /// Sign of a (roughly horizontal) axis: its largest horizontal component positive.
@@ -442,11 +408,7 @@ mod tests {
     fn recovers_a_rotated_box() {
         let rot = Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.3, 0.9);
         let size = Vec3::new(0.8, 0.5, 0.3);
-        let prim = Primitive::new(
-            PrimitiveKind::Cuboid,
-            size,
-            Pose::from_parts(Vec3::new(1.0, 2.0, 0.5), rot),
-        );
+        let prim = Primitive::new(PrimitiveKind::Cuboid, size, Pose::from_parts(Vec3::new(1.0, 2.0, 0.5), rot));
         let pts = prim.sample_surface(3000);
         let obb = min_volume_obb(&pts);
         let truth = prim.axes_world();
@@ -454,21 +416,13 @@ mod tests {
         let got_size = obb.size.to_array();
         for (k, t) in truth.iter().enumerate() {
             // The box axis most parallel to the true axis k.
-            let (best, angle) = (0..3)
-                .map(|g| (g, line_angle_deg(got[g], *t)))
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .expect("three axes");
+            let (best, angle) = (0..3).map(|g| (g, line_angle_deg(got[g], *t))).min_by(|a, b| a.1.total_cmp(&b.1)).expect("three axes");
             assert!(angle < 1.0, "axis {k}: {angle}°");
             let rel = (got_size[best] / size[k] - 1.0).abs();
             assert!(rel < 0.02, "size {k}: {} vs {}", got_size[best], size[k]);
         }
         assert!((obb.center - prim.center()).length() < 0.01);
-        assert!(
-            obb.volume() <= pca_box_volume(&pts) * 1.0001,
-            "{} vs PCA {}",
-            obb.volume(),
-            pca_box_volume(&pts)
-        );
+        assert!(obb.volume() <= pca_box_volume(&pts) * 1.0001, "{} vs PCA {}", obb.volume(), pca_box_volume(&pts));
         // Right-handed unit frame.
         assert!((obb.axes.determinant() - 1.0).abs() < 1e-4);
         // Every point inside (up to float error).
@@ -481,17 +435,11 @@ mod tests {
     #[test]
     fn beats_pca_on_a_skewed_cloud() {
         // Dense points on one side of a box skew PCA; the minimal box does not care.
-        let prim = Primitive::new(
-            PrimitiveKind::Cuboid,
-            Vec3::new(1.0, 1.0, 0.2),
-            Pose::from_parts(Vec3::ZERO, Quat::from_rotation_z(0.3)),
-        );
+        let prim =
+            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(1.0, 1.0, 0.2), Pose::from_parts(Vec3::ZERO, Quat::from_rotation_z(0.3)));
         let mut pts = prim.sample_surface(1000);
-        let extra: Vec<Vec3> = prim
-            .sample_surface(4000)
-            .into_iter()
-            .filter(|p| prim.world_from_primitive.inverse_transform_point(*p).x > 0.3)
-            .collect();
+        let extra: Vec<Vec3> =
+            prim.sample_surface(4000).into_iter().filter(|p| prim.world_from_primitive.inverse_transform_point(*p).x > 0.3).collect();
         pts.extend(extra);
         let obb = min_volume_obb(&pts);
         assert!(obb.volume() < pca_box_volume(&pts) * 0.99 || (pca_box_volume(&pts) - 0.2).abs() < 0.004);
@@ -521,20 +469,12 @@ mod tests {
         let pts: Vec<Vec3> = prim
             .sample_surface(3000)
             .into_iter()
-            .map(|p| {
-                p + Vec3::new(
-                    r.random_range(-1.0..1.0),
-                    r.random_range(-1.0..1.0),
-                    r.random_range(-1.0..1.0),
-                ) * 0.002
-            })
+            .map(|p| p + Vec3::new(r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)) * 0.002)
             .collect();
         let obb = min_volume_obb(&pts);
         for t in prim.axes_world() {
-            let angle = [obb.axes.x_axis, obb.axes.y_axis, obb.axes.z_axis]
-                .iter()
-                .map(|g| line_angle_deg(*g, t))
-                .fold(f32::INFINITY, f32::min);
+            let angle =
+                [obb.axes.x_axis, obb.axes.y_axis, obb.axes.z_axis].iter().map(|g| line_angle_deg(*g, t)).fold(f32::INFINITY, f32::min);
             assert!(angle < 2.0, "{angle}");
         }
     }
@@ -543,9 +483,7 @@ mod tests {
     fn degenerate_inputs_do_not_panic() {
         // Planar: a rotated square patch.
         let rot = Quat::from_euler(glam::EulerRot::XYZ, 0.7, 0.1, 0.3);
-        let planar: Vec<Vec3> = (0..400)
-            .map(|i| rot * Vec3::new((i % 20) as f32 * 0.05, (i / 20) as f32 * 0.03, 0.0))
-            .collect();
+        let planar: Vec<Vec3> = (0..400).map(|i| rot * Vec3::new((i % 20) as f32 * 0.05, (i / 20) as f32 * 0.03, 0.0)).collect();
         let obb = min_volume_obb(&planar);
         let mut s = obb.size.to_array();
         s.sort_by(f32::total_cmp);
@@ -554,11 +492,7 @@ mod tests {
         // Collinear.
         let line: Vec<Vec3> = (0..50).map(|i| Vec3::new(1.0, 2.0, 3.0) * (i as f32 * 0.01)).collect();
         let obb = min_volume_obb(&line);
-        assert!(
-            (obb.size.max_element() - 0.49 * Vec3::new(1.0, 2.0, 3.0).length()).abs() < 1e-3,
-            "{}",
-            obb.size
-        );
+        assert!((obb.size.max_element() - 0.49 * Vec3::new(1.0, 2.0, 3.0).length()).abs() < 1e-3, "{}", obb.size);
         // Few points, duplicates, non-finite, empty.
         for pts in [
             vec![],
@@ -568,10 +502,7 @@ mod tests {
             vec![Vec3::ZERO, Vec3::X, Vec3::NAN, Vec3::Y, Vec3::Z, Vec3::INFINITY],
         ] {
             let obb = min_volume_obb(&pts);
-            assert!(
-                obb.center.is_finite() && obb.size.is_finite() && obb.size.min_element() >= MIN_EXTENT_M,
-                "{obb:?}"
-            );
+            assert!(obb.center.is_finite() && obb.size.is_finite() && obb.size.min_element() >= MIN_EXTENT_M, "{obb:?}");
             assert!((obb.axes.determinant() - 1.0).abs() < 1e-4);
         }
     }

@@ -64,10 +64,7 @@ impl Default for FitConfig {
             max_points_for_fit: 1500,
             max_points_for_selection: 300,
             kinds: PrimitiveKind::ALL.to_vec(),
-            icp: IcpConfig {
-                refit_size: true,
-                ..IcpConfig::default()
-            },
+            icp: IcpConfig { refit_size: true, ..IcpConfig::default() },
             screen_iterations: 4,
             screen_keep_max: 2,
             screen_keep_ratio: 1.5,
@@ -131,36 +128,22 @@ pub fn fit_part(points: &[Vec3], cfg: &FitConfig, forced_kind: Option<PrimitiveK
         return Err(FitError::TooFewPoints { got: points.len(), min });
     }
     if let Some((index, p)) = points.iter().enumerate().find(|(_, p)| !p.is_finite()) {
-        return Err(FitError::NonFinite {
-            index,
-            x: p.x,
-            y: p.y,
-            z: p.z,
-        });
+        return Err(FitError::NonFinite { index, x: p.x, y: p.y, z: p.z });
     }
     let fit_set = subsample_stride(points, cfg.max_points_for_fit.max(min));
     let coords: Vec<[f32; 3]> = fit_set.iter().map(Vec3::to_array).collect();
-    let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&coords).map_err(|e| FitError::Degenerate {
-        reason: format!("cannot index the part's points: {e:?}"),
-    })?;
+    let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&coords)
+        .map_err(|e| FitError::Degenerate { reason: format!("cannot index the part's points: {e:?}") })?;
     // Stray points are dropped from the selection subsample (neighbours looked up among the
     // denser fit set): the minimal box is built on it and would be inflated by them.
     let selection_raw = subsample_stride(&fit_set, cfg.max_points_for_selection.max(min));
     let (filtered, spacing) = drop_isolated(&selection_raw, &tree, cfg.outlier_neighbors.max(1), cfg.outlier_factor);
-    let selection = if cfg.outlier_neighbors > 0 && filtered.len() >= min {
-        filtered
-    } else {
-        selection_raw
-    };
+    let selection = if cfg.outlier_neighbors > 0 && filtered.len() >= min { filtered } else { selection_raw };
 
     let obb = min_volume_obb(&selection);
     if obb.size.max_element() < 2.0 * MIN_EXTENT_M {
         return Err(FitError::Degenerate {
-            reason: format!(
-                "all {} points lie within {} mm of each other",
-                points.len(),
-                2.0 * MIN_EXTENT_M * 1000.0
-            ),
+            reason: format!("all {} points lie within {} mm of each other", points.len(), 2.0 * MIN_EXTENT_M * 1000.0),
         });
     }
 
@@ -176,18 +159,13 @@ pub fn fit_part(points: &[Vec3], cfg: &FitConfig, forced_kind: Option<PrimitiveK
         ks
     };
     if kinds.is_empty() {
-        return Err(FitError::Degenerate {
-            reason: "no primitive kinds to try (FitConfig::kinds is empty)".into(),
-        });
+        return Err(FitError::Degenerate { reason: "no primitive kinds to try (FitConfig::kinds is empty)".into() });
     }
 
     // Screening: a few ICP iterations per template; only the candidates whose mean point→surface
     // error is close to the best one are aligned to convergence (the others keep their
     // screening pose and are still scored and listed).
-    let screen_icp = IcpConfig {
-        max_iterations: cfg.screen_iterations.min(cfg.icp.max_iterations),
-        ..cfg.icp.clone()
-    };
+    let screen_icp = IcpConfig { max_iterations: cfg.screen_iterations.min(cfg.icp.max_iterations), ..cfg.icp.clone() };
     let mut screened: Vec<(Primitive, f32)> = Vec::new();
     let pca_box = pca_obb(&selection);
     let pca_box = (axes_angle_deg(&pca_box.axes, &obb.axes) > 1.0).then_some(&pca_box);
@@ -207,14 +185,9 @@ pub fn fit_part(points: &[Vec3], cfg: &FitConfig, forced_kind: Option<PrimitiveK
         // The first of its kind in the ranking gets a second chance: a template whose box was
         // inflated by a near stray point converges more slowly than the others.
         let first_of_kind = order.iter().find(|o| screened[**o].0.kind == p.kind) == Some(&i);
-        let promising = (rank < cfg.screen_keep_max.max(1)
-            && *error <= best_error * cfg.screen_keep_ratio.max(1.0) + 1e-4)
+        let promising = (rank < cfg.screen_keep_max.max(1) && *error <= best_error * cfg.screen_keep_ratio.max(1.0) + 1e-4)
             || (first_of_kind && *error <= best_error * cfg.screen_keep_ratio_per_kind.max(1.0) + 1e-4);
-        let aligned = if promising {
-            icp_align(p, &selection, &cfg.icp).primitive
-        } else {
-            *p
-        };
+        let aligned = if promising { icp_align(p, &selection, &cfg.icp).primitive } else { *p };
         if aligned.world_from_primitive.is_finite() && aligned.size.is_finite() {
             measured.push(measure(&aligned, &selection, &tree, cfg));
         }
@@ -230,40 +203,25 @@ pub fn fit_part(points: &[Vec3], cfg: &FitConfig, forced_kind: Option<PrimitiveK
         .clamp(cfg.coverage_fraction.clamp(0.0, 1.0), 1.0);
     let candidates: Vec<Candidate> = measured
         .iter()
-        .map(|m| Candidate {
-            primitive: m.primitive,
-            score: m.score(fraction, cfg.coverage_weight),
-        })
+        .map(|m| Candidate { primitive: m.primitive, score: m.score(fraction, cfg.coverage_weight) })
         .filter(|c| c.score.is_finite())
         .collect();
-    let chosen = choose(&candidates, cfg.tie_tolerance, cfg.capsule_penalty).ok_or_else(|| FitError::Degenerate {
-        reason: "no candidate primitive could be aligned".into(),
-    })?;
+    let chosen = choose(&candidates, cfg.tie_tolerance, cfg.capsule_penalty)
+        .ok_or_else(|| FitError::Degenerate { reason: "no candidate primitive could be aligned".into() })?;
 
     // Final alignment on the larger subsample, without the points far from the chosen primitive
     // (strays; the size statistics use all points given); kept unless it made things worse.
     let kept = near_points(&chosen.primitive, &fit_set);
     let refined = icp_align(&chosen.primitive, &kept, &cfg.icp).primitive;
     let refined_score = measure(&refined, &selection, &tree, cfg).score(fraction, cfg.coverage_weight);
-    let (primitive, score) = if refined.world_from_primitive.is_finite()
-        && refined_score.is_finite()
-        && refined_score <= chosen.score * 1.1 + 1e-4
-    {
-        (refined, refined_score)
-    } else {
-        (chosen.primitive, chosen.score)
-    };
-    let fit_error = (points
-        .iter()
-        .map(|p| f64::from(primitive.surface_distance(*p)))
-        .sum::<f64>()
-        / points.len() as f64) as f32;
-    Ok(PartFit {
-        primitive,
-        fit_error,
-        score,
-        candidates,
-    })
+    let (primitive, score) =
+        if refined.world_from_primitive.is_finite() && refined_score.is_finite() && refined_score <= chosen.score * 1.1 + 1e-4 {
+            (refined, refined_score)
+        } else {
+            (chosen.primitive, chosen.score)
+        };
+    let fit_error = (points.iter().map(|p| f64::from(primitive.surface_distance(*p))).sum::<f64>() / points.len() as f64) as f32;
+    Ok(PartFit { primitive, fit_error, score, candidates })
 }
 
 /// The paper's templates scaled by the minimal box: the box itself, cylinders and capsules along
@@ -279,18 +237,10 @@ fn templates(obb: &Obb, pca_box: Option<&Obb>, kinds: &[PrimitiveKind]) -> Vec<P
             PrimitiveKind::Cuboid => {
                 out.push(Primitive::new(*kind, obb.size, pose_of(obb.axes)));
                 if let Some(b) = pca_box {
-                    out.push(Primitive::new(
-                        *kind,
-                        b.size,
-                        Pose::from_parts(b.center, Quat::from_mat3(&b.axes).normalize()),
-                    ));
+                    out.push(Primitive::new(*kind, b.size, Pose::from_parts(b.center, Quat::from_mat3(&b.axes).normalize())));
                 }
             }
-            PrimitiveKind::Sphere => out.push(Primitive::new(
-                *kind,
-                Vec3::splat(obb.size.element_sum() / 3.0),
-                pose_of(obb.axes),
-            )),
+            PrimitiveKind::Sphere => out.push(Primitive::new(*kind, Vec3::splat(obb.size.element_sum() / 3.0), pose_of(obb.axes))),
             PrimitiveKind::Cylinder | PrimitiveKind::Capsule => {
                 for k in 0..3 {
                     // Cyclic permutation keeps the frame right-handed; the axis becomes local z.
@@ -341,11 +291,7 @@ fn measure(prim: &Primitive, points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, cf
     let data_to_model = if points.is_empty() {
         f32::INFINITY
     } else {
-        (points
-            .iter()
-            .map(|p| f64::from(prim.surface_distance(*p).min(cap)))
-            .sum::<f64>()
-            / points.len() as f64) as f32
+        (points.iter().map(|p| f64::from(prim.surface_distance(*p).min(cap))).sum::<f64>() / points.len() as f64) as f32
     };
     let mut sample_distances: Vec<f32> = prim
         .sample_surface(cfg.score_samples.max(1))
@@ -362,11 +308,7 @@ fn measure(prim: &Primitive, points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, cf
         })
         .collect();
     sample_distances.sort_by(f32::total_cmp);
-    Measured {
-        primitive: *prim,
-        data_to_model,
-        sample_distances,
-    }
+    Measured { primitive: *prim, data_to_model, sample_distances }
 }
 
 /// The best candidate by score (a capsule's score raised by `capsule_penalty`); among those
@@ -374,11 +316,7 @@ fn measure(prim: &Primitive, points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, cf
 /// [`PrimitiveKind`]), then the lower score, then the earlier one.
 fn choose(candidates: &[Candidate], tie_tolerance: f32, capsule_penalty: f32) -> Option<Candidate> {
     let effective = |c: &Candidate| {
-        if c.primitive.kind == PrimitiveKind::Capsule {
-            c.score * (1.0 + capsule_penalty.max(0.0))
-        } else {
-            c.score
-        }
+        if c.primitive.kind == PrimitiveKind::Capsule { c.score * (1.0 + capsule_penalty.max(0.0)) } else { c.score }
     };
     let best = candidates.iter().map(effective).fold(f32::INFINITY, f32::min);
     if !best.is_finite() {
@@ -388,12 +326,7 @@ fn choose(candidates: &[Candidate], tie_tolerance: f32, capsule_penalty: f32) ->
     candidates
         .iter()
         .filter(|c| effective(c) <= bar)
-        .min_by(|a, b| {
-            a.primitive
-                .kind
-                .cmp(&b.primitive.kind)
-                .then(effective(a).total_cmp(&effective(b)))
-        })
+        .min_by(|a, b| a.primitive.kind.cmp(&b.primitive.kind).then(effective(a).total_cmp(&effective(b))))
         .copied()
 }
 
@@ -404,17 +337,8 @@ fn near_points(prim: &Primitive, points: &[Vec3]) -> Vec<Vec3> {
     let mut scratch = dist.clone();
     let median = quantile_in_place(&mut scratch, 0.5).unwrap_or(0.0);
     let limit = (8.0 * median).max(0.05 * prim.size.max_element()).max(0.005);
-    let kept: Vec<Vec3> = points
-        .iter()
-        .zip(&dist)
-        .filter(|(_, d)| **d <= limit)
-        .map(|(p, _)| *p)
-        .collect();
-    if kept.len() * 2 < points.len() {
-        points.to_vec()
-    } else {
-        kept
-    }
+    let kept: Vec<Vec3> = points.iter().zip(&dist).filter(|(_, d)| **d <= limit).map(|(p, _)| *p).collect();
+    if kept.len() * 2 < points.len() { points.to_vec() } else { kept }
 }
 
 /// Points whose mean distance to their `k` nearest neighbours (in `tree`) is not an outlier
@@ -431,10 +355,7 @@ fn drop_isolated(points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, k: usize, fact
     let mean_knn: Vec<f32> = points
         .iter()
         .map(|p| {
-            let found = tree
-                .query(&p.to_array())
-                .nearest_n::<SquaredEuclidean<f32>>(qty)
-                .execute();
+            let found = tree.query(&p.to_array()).nearest_n::<SquaredEuclidean<f32>>(qty).execute();
             // The first hit is the point itself (or a duplicate at distance 0).
             let others = found.len().saturating_sub(1).max(1);
             found.iter().skip(1).map(|r| r.distance.sqrt()).sum::<f32>() / others as f32
@@ -447,17 +368,8 @@ fn drop_isolated(points: &[Vec3], tree: &ImmutableKdTree<f32, 3>, k: usize, fact
     let mut dev: Vec<f32> = mean_knn.iter().map(|d| (d - median).abs()).collect();
     let mad = quantile_in_place(&mut dev, 0.5).unwrap_or(0.0);
     let threshold = (median * factor).max(median + 6.0 * 1.4826 * mad).max(1e-6);
-    let kept: Vec<Vec3> = points
-        .iter()
-        .zip(&mean_knn)
-        .filter(|(_, d)| **d <= threshold)
-        .map(|(p, _)| *p)
-        .collect();
-    if kept.len() * 4 < points.len() * 3 {
-        (points.to_vec(), median)
-    } else {
-        (kept, median)
-    }
+    let kept: Vec<Vec3> = points.iter().zip(&mean_knn).filter(|(_, d)| **d <= threshold).map(|(p, _)| *p).collect();
+    if kept.len() * 4 < points.len() * 3 { (points.to_vec(), median) } else { (kept, median) }
 }
 
 #[cfg(test)]
@@ -492,11 +404,7 @@ mod tests {
 
     #[test]
     fn picks_a_cuboid_for_box_points() {
-        let truth = Primitive::new(
-            PrimitiveKind::Cuboid,
-            Vec3::new(0.5, 0.4, 0.9),
-            pose(Vec3::new(1.0, 0.0, 0.45), 0.0, 0.0, 0.4),
-        );
+        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::new(1.0, 0.0, 0.45), 0.0, 0.0, 0.4));
         let fit = fit_part(&noisy(&truth, 3000, 1), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cuboid);
         assert!((fit.primitive.center() - truth.center()).length() < 0.005);
@@ -514,29 +422,17 @@ mod tests {
 
     #[test]
     fn picks_a_cylinder_with_the_right_axis() {
-        let truth = Primitive::new(
-            PrimitiveKind::Cylinder,
-            Vec3::new(0.3, 0.3, 0.7),
-            pose(Vec3::new(0.0, 2.0, 0.5), 0.5, 0.2, 0.0),
-        );
+        let truth = Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.3, 0.3, 0.7), pose(Vec3::new(0.0, 2.0, 0.5), 0.5, 0.2, 0.0));
         let fit = fit_part(&noisy(&truth, 3000, 2), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cylinder, "{:?}", fit.candidates);
         let axis_err = line_angle_deg(fit.primitive.axes_world()[2], truth.axes_world()[2]);
         assert!(axis_err < 1.0, "{axis_err}°");
-        assert!(
-            (fit.primitive.size.x - 0.3).abs() < 0.006 && (fit.primitive.size.z - 0.7).abs() < 0.008,
-            "{}",
-            fit.primitive.size
-        );
+        assert!((fit.primitive.size.x - 0.3).abs() < 0.006 && (fit.primitive.size.z - 0.7).abs() < 0.008, "{}", fit.primitive.size);
     }
 
     #[test]
     fn picks_a_sphere_for_sphere_points() {
-        let truth = Primitive::new(
-            PrimitiveKind::Sphere,
-            Vec3::splat(0.35),
-            pose(Vec3::new(-1.0, 0.5, 1.0), 0.0, 0.0, 0.0),
-        );
+        let truth = Primitive::new(PrimitiveKind::Sphere, Vec3::splat(0.35), pose(Vec3::new(-1.0, 0.5, 1.0), 0.0, 0.0, 0.0));
         let fit = fit_part(&noisy(&truth, 3000, 3), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Sphere, "{:?}", fit.candidates);
         assert!((fit.primitive.size.x - 0.35).abs() < 0.005, "{}", fit.primitive.size);
@@ -545,42 +441,23 @@ mod tests {
 
     #[test]
     fn picks_a_capsule_for_capsule_points() {
-        let truth = Primitive::new(
-            PrimitiveKind::Capsule,
-            Vec3::new(0.2, 0.2, 0.8),
-            pose(Vec3::new(0.5, 0.5, 1.0), 1.2, 0.3, 0.0),
-        );
+        let truth = Primitive::new(PrimitiveKind::Capsule, Vec3::new(0.2, 0.2, 0.8), pose(Vec3::new(0.5, 0.5, 1.0), 1.2, 0.3, 0.0));
         let fit = fit_part(&noisy(&truth, 3000, 5), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Capsule, "{:?}", fit.candidates);
         assert!(line_angle_deg(fit.primitive.axes_world()[2], truth.axes_world()[2]) < 1.0);
-        assert!(
-            (fit.primitive.size - truth.size).abs().max_element() < 0.008,
-            "{}",
-            fit.primitive.size
-        );
+        assert!((fit.primitive.size - truth.size).abs().max_element() < 0.008, "{}", fit.primitive.size);
     }
 
     #[test]
     fn thin_board_is_a_cuboid_with_the_right_thickness() {
-        let truth = Primitive::new(
-            PrimitiveKind::Cuboid,
-            Vec3::new(0.6, 0.02, 0.8),
-            pose(Vec3::new(0.3, 0.8, 0.5), 0.0, 0.0, 1.1),
-        );
+        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.6, 0.02, 0.8), pose(Vec3::new(0.3, 0.8, 0.5), 0.0, 0.0, 1.1));
         let fit = fit_part(&noisy(&truth, 3000, 4), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cuboid, "{:?}", fit.candidates);
         let thickness = fit.primitive.size.min_element();
         assert!((thickness - 0.02).abs() < 0.005, "{}", fit.primitive.size);
         // The thin axis is the board's normal.
         let [x, y, z] = fit.primitive.axes_world();
-        let thin = [x, y, z][fit
-            .primitive
-            .size
-            .to_array()
-            .iter()
-            .enumerate()
-            .min_by(|a, b| a.1.total_cmp(b.1))
-            .map_or(0, |m| m.0)];
+        let thin = [x, y, z][fit.primitive.size.to_array().iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |m| m.0)];
         assert!(line_angle_deg(thin, truth.axes_world()[1]) < 1.0);
     }
 
@@ -588,14 +465,9 @@ mod tests {
     fn noisy_points(pts: &[Vec3], seed: u64) -> Vec<Vec3> {
         let mut r = rng(seed);
         let noise = Normal::new(0.0_f32, 0.002).expect("valid sigma");
-        let mut out: Vec<Vec3> = pts
-            .iter()
-            .map(|p| *p + Vec3::new(noise.sample(&mut r), noise.sample(&mut r), noise.sample(&mut r)))
-            .collect();
-        let (lo, hi) = pts.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(l, h), p| (l.min(*p), h.max(*p)),
-        );
+        let mut out: Vec<Vec3> =
+            pts.iter().map(|p| *p + Vec3::new(noise.sample(&mut r), noise.sample(&mut r), noise.sample(&mut r))).collect();
+        let (lo, hi) = pts.iter().fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(l, h), p| (l.min(*p), h.max(*p)));
         for _ in 0..pts.len() / 100 {
             let t = Vec3::new(r.random(), r.random(), r.random());
             let idx = r.random_range(0..out.len());
@@ -607,11 +479,7 @@ mod tests {
     #[test]
     fn partial_scan_of_a_cabinet_is_a_cuboid_of_the_right_size() {
         // Seen from one corner: only the +x, +y and +z faces.
-        let truth = Primitive::new(
-            PrimitiveKind::Cuboid,
-            Vec3::new(0.5, 0.4, 0.9),
-            pose(Vec3::new(1.0, 0.0, 0.45), 0.0, 0.0, 0.4),
-        );
+        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::new(1.0, 0.0, 0.45), 0.0, 0.0, 0.4));
         let h = truth.size * 0.5;
         let visible: Vec<Vec3> = truth
             .sample_surface(5000)
@@ -623,11 +491,7 @@ mod tests {
             .collect();
         let fit = fit_part(&noisy_points(&visible, 11), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cuboid, "{:?}", fit.candidates);
-        assert!(
-            (fit.primitive.center() - truth.center()).length() < 0.01,
-            "{}",
-            fit.primitive.center()
-        );
+        assert!((fit.primitive.center() - truth.center()).length() < 0.01, "{}", fit.primitive.center());
         let mut got = fit.primitive.size.to_array();
         let mut want = truth.size.to_array();
         got.sort_by(f32::total_cmp);
@@ -640,11 +504,7 @@ mod tests {
     #[test]
     fn partial_scan_of_a_cylinder_is_a_cylinder() {
         // Seen from the side and above: the half side facing +x and the top cap.
-        let truth = Primitive::new(
-            PrimitiveKind::Cylinder,
-            Vec3::new(0.3, 0.3, 0.7),
-            pose(Vec3::new(0.0, 2.0, 0.35), 0.0, 0.0, 0.0),
-        );
+        let truth = Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.3, 0.3, 0.7), pose(Vec3::new(0.0, 2.0, 0.35), 0.0, 0.0, 0.0));
         let visible: Vec<Vec3> = truth
             .sample_surface(5000)
             .into_iter()
@@ -656,26 +516,13 @@ mod tests {
         let fit = fit_part(&noisy_points(&visible, 12), &FitConfig::default(), None).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Cylinder, "{:?}", fit.candidates);
         assert!(line_angle_deg(fit.primitive.axes_world()[2], Vec3::Z) < 2.0);
-        assert!(
-            (fit.primitive.size.x - 0.3).abs() < 0.01 && (fit.primitive.size.z - 0.7).abs() < 0.01,
-            "{}",
-            fit.primitive.size
-        );
+        assert!((fit.primitive.size.x - 0.3).abs() < 0.01 && (fit.primitive.size.z - 0.7).abs() < 0.01, "{}", fit.primitive.size);
     }
 
     #[test]
     fn forced_kind_is_respected() {
-        let truth = Primitive::new(
-            PrimitiveKind::Cuboid,
-            Vec3::new(0.5, 0.4, 0.3),
-            pose(Vec3::ZERO, 0.0, 0.0, 0.0),
-        );
-        let fit = fit_part(
-            &truth.sample_surface(800),
-            &FitConfig::default(),
-            Some(PrimitiveKind::Sphere),
-        )
-        .expect("fits");
+        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.3), pose(Vec3::ZERO, 0.0, 0.0, 0.0));
+        let fit = fit_part(&truth.sample_surface(800), &FitConfig::default(), Some(PrimitiveKind::Sphere)).expect("fits");
         assert_eq!(fit.primitive.kind, PrimitiveKind::Sphere);
         assert!(fit.candidates.iter().all(|c| c.primitive.kind == PrimitiveKind::Sphere));
     }
@@ -683,30 +530,19 @@ mod tests {
     #[test]
     fn bad_inputs_are_errors() {
         let three = [Vec3::ZERO, Vec3::X, Vec3::Y];
-        assert_eq!(
-            fit_part(&three, &FitConfig::default(), None),
-            Err(FitError::TooFewPoints { got: 3, min: 10 })
-        );
+        assert_eq!(fit_part(&three, &FitConfig::default(), None), Err(FitError::TooFewPoints { got: 3, min: 10 }));
         let msg = FitError::TooFewPoints { got: 3, min: 10 }.to_string();
         assert!(msg.contains('3') && msg.contains("10"), "{msg}");
         let mut pts = Primitive::cuboid_at(Vec3::ZERO, Vec3::ONE).sample_surface(100);
         pts[7] = Vec3::new(0.0, f32::NAN, 0.0);
-        assert!(matches!(
-            fit_part(&pts, &FitConfig::default(), None),
-            Err(FitError::NonFinite { index: 7, .. })
-        ));
+        assert!(matches!(fit_part(&pts, &FitConfig::default(), None), Err(FitError::NonFinite { index: 7, .. })));
         let same = vec![Vec3::ONE; 50];
-        assert!(matches!(
-            fit_part(&same, &FitConfig::default(), None),
-            Err(FitError::Degenerate { .. })
-        ));
+        assert!(matches!(fit_part(&same, &FitConfig::default(), None), Err(FitError::Degenerate { .. })));
     }
 
     #[test]
     fn planar_patch_fits_without_panicking() {
-        let pts: Vec<Vec3> = (0..400)
-            .map(|i| Vec3::new((i % 20) as f32 * 0.02, (i / 20) as f32 * 0.03, 0.7))
-            .collect();
+        let pts: Vec<Vec3> = (0..400).map(|i| Vec3::new((i % 20) as f32 * 0.02, (i / 20) as f32 * 0.03, 0.7)).collect();
         let fit = fit_part(&pts, &FitConfig::default(), None).expect("fits");
         assert!(fit.fit_error < 0.003, "{}", fit.fit_error);
     }
@@ -717,32 +553,12 @@ mod tests {
     #[ignore = "timing; run in release by hand"]
     fn timing_per_part() {
         let parts = [
-            Primitive::new(
-                PrimitiveKind::Cuboid,
-                Vec3::new(0.5, 0.4, 0.9),
-                pose(Vec3::ZERO, 0.0, 0.0, 0.4),
-            ),
-            Primitive::new(
-                PrimitiveKind::Cuboid,
-                Vec3::new(0.6, 0.02, 0.8),
-                pose(Vec3::ZERO, 0.0, 0.0, 1.1),
-            ),
-            Primitive::new(
-                PrimitiveKind::Cylinder,
-                Vec3::new(0.3, 0.3, 0.7),
-                pose(Vec3::ZERO, 0.5, 0.2, 0.0),
-            ),
-            Primitive::new(
-                PrimitiveKind::Sphere,
-                Vec3::splat(0.35),
-                pose(Vec3::ZERO, 0.0, 0.0, 0.0),
-            ),
+            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::ZERO, 0.0, 0.0, 0.4)),
+            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.6, 0.02, 0.8), pose(Vec3::ZERO, 0.0, 0.0, 1.1)),
+            Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.3, 0.3, 0.7), pose(Vec3::ZERO, 0.5, 0.2, 0.0)),
+            Primitive::new(PrimitiveKind::Sphere, Vec3::splat(0.35), pose(Vec3::ZERO, 0.0, 0.0, 0.0)),
         ];
-        let clouds: Vec<Vec<Vec3>> = parts
-            .iter()
-            .enumerate()
-            .map(|(i, p)| noisy(p, 3000, i as u64))
-            .collect();
+        let clouds: Vec<Vec<Vec3>> = parts.iter().enumerate().map(|(i, p)| noisy(p, 3000, i as u64)).collect();
         let cfg = FitConfig::default();
         for (cloud, part) in clouds.iter().zip(&parts) {
             let reps = 50;
@@ -757,10 +573,7 @@ mod tests {
             for _ in 0..reps {
                 let _ = min_volume_obb(cloud);
             }
-            eprintln!(
-                "  obb alone: {:.3} ms",
-                t0.elapsed().as_secs_f64() * 1000.0 / f64::from(reps)
-            );
+            eprintln!("  obb alone: {:.3} ms", t0.elapsed().as_secs_f64() * 1000.0 / f64::from(reps));
         }
     }
 
@@ -776,44 +589,18 @@ mod tests {
         let mut failures = Vec::new();
         for trial in 0..100u64 {
             for kind in [PrimitiveKind::Cuboid, PrimitiveKind::Cylinder, PrimitiveKind::Sphere] {
-                let size = Vec3::new(
-                    r.random_range(0.015..0.8),
-                    r.random_range(0.015..0.8),
-                    r.random_range(0.015..0.8),
-                );
-                let centre = Vec3::new(
-                    r.random_range(-2.0..2.0),
-                    r.random_range(-2.0..2.0),
-                    r.random_range(0.0..2.0),
-                );
+                let size = Vec3::new(r.random_range(0.015..0.8), r.random_range(0.015..0.8), r.random_range(0.015..0.8));
+                let centre = Vec3::new(r.random_range(-2.0..2.0), r.random_range(-2.0..2.0), r.random_range(0.0..2.0));
                 let truth = Primitive::new(
                     kind,
                     size,
-                    pose(
-                        centre,
-                        r.random_range(-3.0..3.0),
-                        r.random_range(-3.0..3.0),
-                        r.random_range(-3.0..3.0),
-                    ),
+                    pose(centre, r.random_range(-3.0..3.0), r.random_range(-3.0..3.0), r.random_range(-3.0..3.0)),
                 );
                 let partial = trial % 2 == 1;
-                let view = Vec3::new(
-                    r.random_range(-1.0..1.0),
-                    r.random_range(-1.0..1.0),
-                    r.random_range(0.2..1.0),
-                )
-                .normalize();
+                let view = Vec3::new(r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(0.2..1.0)).normalize();
                 // Visible: the first hit of a ray from the viewer's side is the point itself.
-                let visible = |q: &Vec3| {
-                    truth
-                        .ray_cast(*q + view * 5.0, -view, 10.0)
-                        .is_some_and(|hit| (hit.0 - 5.0).abs() < 1e-3)
-                };
-                let pts: Vec<Vec3> = truth
-                    .sample_surface(3000)
-                    .into_iter()
-                    .filter(|q| !partial || visible(q))
-                    .collect();
+                let visible = |q: &Vec3| truth.ray_cast(*q + view * 5.0, -view, 10.0).is_some_and(|hit| (hit.0 - 5.0).abs() < 1e-3);
+                let pts: Vec<Vec3> = truth.sample_surface(3000).into_iter().filter(|q| !partial || visible(q)).collect();
                 if pts.len() < 50 {
                     continue;
                 }
@@ -840,11 +627,7 @@ mod tests {
 
     #[test]
     fn is_deterministic() {
-        let truth = Primitive::new(
-            PrimitiveKind::Cuboid,
-            Vec3::new(0.5, 0.4, 0.9),
-            pose(Vec3::ZERO, 0.1, 0.0, 0.4),
-        );
+        let truth = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.4, 0.9), pose(Vec3::ZERO, 0.1, 0.0, 0.4));
         let pts = noisy(&truth, 2000, 9);
         let a = fit_part(&pts, &FitConfig::default(), None).expect("fits");
         let b = fit_part(&pts, &FitConfig::default(), None).expect("fits");

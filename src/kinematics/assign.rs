@@ -35,7 +35,7 @@ impl Default for KinematicsConfig {
     }
 }
 
-/// The lowercase words of a label ("Door_Left" → "door", "left").
+/// The lowercase words of a label (`Door_Left` → `door`, `left`).
 pub fn label_tokens(label: &str) -> impl Iterator<Item = String> + '_ {
     label.split(|c: char| !c.is_ascii_alphabetic()).filter(|t| !t.is_empty()).map(str::to_ascii_lowercase)
 }
@@ -49,9 +49,7 @@ pub fn joint_kind_for_label(label: &str) -> JointKind {
         JointKind::Fixed
     } else if has(&["knob", "knobs", "dial", "valve"]) {
         JointKind::Revolute
-    } else if has(&["button", "buttons", "switch"]) {
-        JointKind::Prismatic
-    } else if has(&["drawer", "drawers", "tray"]) {
+    } else if has(&["button", "buttons", "switch", "drawer", "drawers", "tray"]) {
         JointKind::Prismatic
     } else if has(&["door", "doors", "lid", "flap", "hatch"]) {
         JointKind::Revolute
@@ -109,15 +107,8 @@ pub fn estimate_joint(
     cfg: &KinematicsConfig,
 ) -> Joint {
     let out = outward_direction(parent, child, handle);
-    let mut joint = Joint {
-        parent: parent_id,
-        child: child_id,
-        kind,
-        axis_world: out,
-        origin_world: child.center(),
-        lower: 0.0,
-        upper: 0.0,
-    };
+    let mut joint =
+        Joint { parent: parent_id, child: child_id, kind, axis_world: out, origin_world: child.center(), lower: 0.0, upper: 0.0 };
     match kind {
         JointKind::Fixed => {}
         JointKind::Prismatic if is_button(child_label) => {

@@ -27,12 +27,7 @@ pub enum PrimitiveKind {
 }
 
 impl PrimitiveKind {
-    pub const ALL: [PrimitiveKind; 4] = [
-        PrimitiveKind::Cuboid,
-        PrimitiveKind::Cylinder,
-        PrimitiveKind::Sphere,
-        PrimitiveKind::Capsule,
-    ];
+    pub const ALL: [PrimitiveKind; 4] = [PrimitiveKind::Cuboid, PrimitiveKind::Cylinder, PrimitiveKind::Sphere, PrimitiveKind::Capsule];
 
     #[must_use]
     pub fn name(self) -> &'static str {
@@ -243,11 +238,8 @@ impl Primitive {
         let h = self.size * 0.5;
         let mut out = [Vec3::ZERO; 8];
         for (i, c) in out.iter_mut().enumerate() {
-            let s = Vec3::new(
-                if i & 1 == 0 { -1.0 } else { 1.0 },
-                if i & 2 == 0 { -1.0 } else { 1.0 },
-                if i & 4 == 0 { -1.0 } else { 1.0 },
-            );
+            let s =
+                Vec3::new(if i & 1 == 0 { -1.0 } else { 1.0 }, if i & 2 == 0 { -1.0 } else { 1.0 }, if i & 4 == 0 { -1.0 } else { 1.0 });
             *c = self.world_from_primitive.transform_point(s * h);
         }
         out
@@ -266,10 +258,7 @@ pub(crate) fn r2(i: usize) -> (f32, f32) {
 /// Splits `n` samples over areas proportionally (at least one each where the area is positive).
 pub(crate) fn split_counts(n: usize, areas: &[f32]) -> Vec<usize> {
     let total: f32 = areas.iter().sum();
-    areas
-        .iter()
-        .map(|a| if *a <= 0.0 || total <= 0.0 { 0 } else { ((n as f32 * a / total).round() as usize).max(1) })
-        .collect()
+    areas.iter().map(|a| if *a <= 0.0 || total <= 0.0 { 0 } else { ((n as f32 * a / total).round() as usize).max(1) }).collect()
 }
 
 #[cfg(test)]
@@ -371,12 +360,7 @@ impl From<PoseJson> for Pose {
 
 impl Serialize for Primitive {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        PrimitiveJson {
-            kind: self.kind,
-            size: self.size.to_array(),
-            world_from_primitive: self.world_from_primitive.into(),
-        }
-        .serialize(s)
+        PrimitiveJson { kind: self.kind, size: self.size.to_array(), world_from_primitive: self.world_from_primitive.into() }.serialize(s)
     }
 }
 

@@ -81,7 +81,12 @@ fn move_subtree(prims: &mut BTreeMap<PartId, Primitive>, tree: &PartTree, part: 
 }
 
 /// Refines one object's primitives in place, top-down along `tree`.
-pub fn refine_object(prims: &mut BTreeMap<PartId, Primitive>, tree: &PartTree, cfg: &RefineConfig, contact_cfg: &ContactConfig) -> RefineStats {
+pub fn refine_object(
+    prims: &mut BTreeMap<PartId, Primitive>,
+    tree: &PartTree,
+    cfg: &RefineConfig,
+    contact_cfg: &ContactConfig,
+) -> RefineStats {
     let mut stats = RefineStats::default();
     for child in tree.top_down().into_iter().skip(1) {
         let Some(&parent) = tree.parent.get(&child) else { continue };
@@ -125,7 +130,8 @@ mod tests {
         let top = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.73), Vec3::new(1.2, 0.8, 0.04));
         let tilt = Quat::from_rotation_x(0.06);
         // Leg slightly tilted and 1 cm into the top.
-        let leg = Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.05, 0.05, 0.72), Pose::from_parts(Vec3::new(0.5, 0.3, 0.36 + 0.01), tilt));
+        let leg =
+            Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.05, 0.05, 0.72), Pose::from_parts(Vec3::new(0.5, 0.3, 0.36 + 0.01), tilt));
         let mut prims = BTreeMap::from([(1, top), (2, leg)]);
         let tree = PartTree { root: 1, parent: BTreeMap::from([(2, 1)]), ..PartTree::default() };
         let stats = refine_object(&mut prims, &tree, &RefineConfig::default(), &ContactConfig::default());

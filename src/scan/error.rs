@@ -19,15 +19,11 @@ pub enum ScanError {
     Header { file: String, detail: String },
 
     /// The header declares no `vertex` element.
-    #[error(
-        "{file}: no `vertex` element in the PLY header (found elements: {found}); expected `element vertex N`"
-    )]
+    #[error("{file}: no `vertex` element in the PLY header (found elements: {found}); expected `element vertex N`")]
     NoVertexElement { file: String, found: String },
 
     /// A required vertex property is not declared.
-    #[error(
-        "{file}: the vertex element has no property `{property}`; expected x, y, z (float or double), object and part (integer)"
-    )]
+    #[error("{file}: the vertex element has no property `{property}`; expected x, y, z (float or double), object and part (integer)")]
     MissingProperty { file: String, property: &'static str },
 
     /// A vertex property has a type the format does not allow (a float id, a list coordinate).
@@ -39,9 +35,7 @@ pub enum ScanError {
     Empty { file: String },
 
     /// A coordinate is NaN or infinite (or a double beyond the `f32` range).
-    #[error(
-        "{file}: vertex {vertex} has a non-finite `{property}` ({value}); expected finite coordinates within the f32 range"
-    )]
+    #[error("{file}: vertex {vertex} has a non-finite `{property}` ({value}); expected finite coordinates within the f32 range")]
     NonFinite { file: String, vertex: usize, property: String, value: String },
 
     /// The body ends before all declared elements were read.
@@ -63,9 +57,7 @@ pub enum ScanError {
     },
 
     /// A key of the labels `objects` or `parts` map is not a decimal integer.
-    #[error(
-        "{file}: key \"{key}\" in `{section}` is not an integer id; expected a decimal string like \"17\""
-    )]
+    #[error("{file}: key \"{key}\" in `{section}` is not an integer id; expected a decimal string like \"17\"")]
     LabelKey { file: String, section: &'static str, key: String },
 
     /// The labels name a part that has no points in the PLY.
@@ -79,8 +71,6 @@ pub enum ScanError {
     IdOutOfRange { file: String, what: &'static str, id: i64 },
 
     /// A scan to be written has a non-finite point.
-    #[error(
-        "{file}: cannot write part {part}: point {index} is not finite; expected finite coordinates"
-    )]
+    #[error("{file}: cannot write part {part}: point {index} is not finite; expected finite coordinates")]
     NonFinitePoint { file: String, part: PartId, index: usize },
 }

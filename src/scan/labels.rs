@@ -47,28 +47,20 @@ struct PartEntry {
 }
 
 fn parse_key(key: &str, section: &'static str, file: &str) -> Result<i64, ScanError> {
-    key.parse::<i64>().map_err(|_| ScanError::LabelKey {
-        file: file.to_owned(),
-        section,
-        key: key.to_owned(),
-    })
+    key.parse::<i64>().map_err(|_| ScanError::LabelKey { file: file.to_owned(), section, key: key.to_owned() })
 }
 
 /// Parses a labels file; `file` names it in errors.
 pub(crate) fn parse_labels(text: &str, file: &str) -> Result<Labels, ScanError> {
     // Some editors on Windows start UTF-8 files with a byte order mark.
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let raw: LabelsFile = serde_json::from_str(text)
-        .map_err(|source| ScanError::LabelsJson { file: file.to_owned(), source })?;
+    let raw: LabelsFile = serde_json::from_str(text).map_err(|source| ScanError::LabelsJson { file: file.to_owned(), source })?;
     let mut labels = Labels::default();
     for (key, entry) in raw.objects {
         labels.objects.insert(parse_key(&key, "objects", file)?, entry.category);
     }
     for (key, entry) in raw.parts {
-        labels.parts.insert(
-            parse_key(&key, "parts", file)?,
-            PartLabel { object: entry.object, label: entry.label },
-        );
+        labels.parts.insert(parse_key(&key, "parts", file)?, PartLabel { object: entry.object, label: entry.label });
     }
     Ok(labels)
 }
@@ -85,23 +77,12 @@ pub fn labels_json(scan: &Scan) -> String {
     for (i, (id, object)) in scan.objects.iter().enumerate() {
         let sep = if i == 0 { "" } else { "," };
         // Writing into a String cannot fail.
-        let _ =
-            write!(out, "{sep}\n    \"{id}\": {{\"category\": {}}}", json_string(&object.category));
+        let _ = write!(out, "{sep}\n    \"{id}\": {{\"category\": {}}}", json_string(&object.category));
     }
-    out.push_str(if scan.objects.is_empty() {
-        "},\n  \"parts\": {"
-    } else {
-        "\n  },\n  \"parts\": {"
-    });
+    out.push_str(if scan.objects.is_empty() { "},\n  \"parts\": {" } else { "\n  },\n  \"parts\": {" });
     for (i, part) in scan.parts.iter().enumerate() {
         let sep = if i == 0 { "" } else { "," };
-        let _ = write!(
-            out,
-            "{sep}\n    \"{}\": {{\"object\": {}, \"label\": {}}}",
-            part.id,
-            part.object,
-            json_string(&part.label)
-        );
+        let _ = write!(out, "{sep}\n    \"{}\": {{\"object\": {}, \"label\": {}}}", part.id, part.object, json_string(&part.label));
     }
     out.push_str(if scan.parts.is_empty() { "}\n}\n" } else { "\n  }\n}\n" });
     out
@@ -119,13 +100,7 @@ mod tests {
         let mut scan = Scan::default();
         scan.objects.insert(3, ScanObject { id: 3, category: "cab\"inet".into() });
         for id in [9, 10] {
-            scan.parts.push(ScanPart {
-                id,
-                object: 3,
-                label: "drawer".into(),
-                points: vec![],
-                normals: None,
-            });
+            scan.parts.push(ScanPart { id, object: 3, label: "drawer".into(), points: vec![], normals: None });
         }
         let text = labels_json(&scan);
         let labels = parse_labels(&text, "l.json").unwrap();

@@ -5,9 +5,7 @@
 use std::io::{Cursor, ErrorKind};
 
 use ply_rs_bw::parser::{ParseError, Parser, Reader};
-use ply_rs_bw::ply::{
-    ElementDef, Encoding, Header, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
-};
+use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType};
 
 use super::error::ScanError;
 use crate::report::Warning;
@@ -100,29 +98,17 @@ const IDS: [&str; 2] = ["object", "part"];
 const NORMALS: [&str; 3] = ["nx", "ny", "nz"];
 
 /// Reads the `vertex` element of a PLY held in memory. `file` names it in errors and warnings.
-pub(crate) fn read_vertices(
-    bytes: &[u8],
-    file: &str,
-    warnings: &mut Vec<Warning>,
-) -> Result<PlyVertices, ScanError> {
+pub(crate) fn read_vertices(bytes: &[u8], file: &str, warnings: &mut Vec<Warning>) -> Result<PlyVertices, ScanError> {
     if bytes.is_empty() {
-        return Err(ScanError::Header {
-            file: file.to_owned(),
-            detail: "the file is empty (0 bytes)".into(),
-        });
+        return Err(ScanError::Header { file: file.to_owned(), detail: "the file is empty (0 bytes)".into() });
     }
     if !bytes.starts_with(b"ply") {
-        let shown: String =
-            String::from_utf8_lossy(&bytes[..bytes.len().min(16)]).escape_debug().collect();
-        return Err(ScanError::Header {
-            file: file.to_owned(),
-            detail: format!("the file starts with \"{shown}\", not \"ply\""),
-        });
+        let shown: String = String::from_utf8_lossy(&bytes[..bytes.len().min(16)]).escape_debug().collect();
+        return Err(ScanError::Header { file: file.to_owned(), detail: format!("the file starts with \"{shown}\", not \"ply\"") });
     }
     let mut reader = Reader::new(Cursor::new(bytes));
-    let header = Parser::<Skip>::new()
-        .read_header(&mut reader)
-        .map_err(|e| ScanError::Header { file: file.to_owned(), detail: one_line(&e) })?;
+    let header =
+        Parser::<Skip>::new().read_header(&mut reader).map_err(|e| ScanError::Header { file: file.to_owned(), detail: one_line(&e) })?;
     let Some(vertex_def) = header.elements.get("vertex") else {
         let found: Vec<&str> = header.elements.keys().map(String::as_str).collect();
         let found = if found.is_empty() { "none".to_owned() } else { found.join(", ") };
@@ -163,12 +149,7 @@ const MAX_DETAIL_CHARS: usize = 300;
 /// The parser's multi-line message on one line, shortened.
 fn one_line(e: &ParseError) -> String {
     let text = e.to_string();
-    let mut out = text
-        .split(['\n', '\t', '\r'])
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .collect::<Vec<_>>()
-        .join(" ");
+    let mut out = text.split(['\n', '\t', '\r']).map(str::trim).filter(|s| !s.is_empty()).collect::<Vec<_>>().join(" ");
     if let Some((cut, _)) = out.char_indices().nth(MAX_DETAIL_CHARS) {
         out.truncate(cut);
         out.push_str("...");
@@ -196,11 +177,7 @@ fn type_name(data_type: &PropertyType) -> String {
 }
 
 /// Checks the required properties and their types; returns whether normals are present.
-fn check_properties(
-    def: &ElementDef,
-    file: &str,
-    warnings: &mut Vec<Warning>,
-) -> Result<bool, ScanError> {
+fn check_properties(def: &ElementDef, file: &str, warnings: &mut Vec<Warning>) -> Result<bool, ScanError> {
     for property in COORDINATES.into_iter().chain(IDS) {
         if !def.properties.contains_key(property) {
             return Err(ScanError::MissingProperty { file: file.to_owned(), property });
@@ -223,12 +200,7 @@ fn check_properties(
             && !matches!(
                 p.data_type,
                 PropertyType::Scalar(
-                    ScalarType::Char
-                        | ScalarType::UChar
-                        | ScalarType::Short
-                        | ScalarType::UShort
-                        | ScalarType::Int
-                        | ScalarType::UInt
+                    ScalarType::Char | ScalarType::UChar | ScalarType::Short | ScalarType::UShort | ScalarType::Int | ScalarType::UInt
                 )
             )
         {
@@ -240,11 +212,8 @@ fn check_properties(
             });
         }
     }
-    let present: Vec<&str> =
-        NORMALS.into_iter().filter(|n| def.properties.contains_key(*n)).collect();
-    let scalar = NORMALS.into_iter().all(|n| {
-        def.properties.get(n).is_some_and(|p| matches!(p.data_type, PropertyType::Scalar(_)))
-    });
+    let present: Vec<&str> = NORMALS.into_iter().filter(|n| def.properties.contains_key(*n)).collect();
+    let scalar = NORMALS.into_iter().all(|n| def.properties.get(n).is_some_and(|p| matches!(p.data_type, PropertyType::Scalar(_))));
     if present.len() == NORMALS.len() && scalar {
         return Ok(true);
     }
@@ -252,10 +221,7 @@ fn check_properties(
         warnings.push(Warning::new(
             "scan",
             file,
-            format!(
-                "normals ignored: found {} of nx, ny, nz as scalars; expected all three",
-                present.join(", ")
-            ),
+            format!("normals ignored: found {} of nx, ny, nz as scalars; expected all three", present.join(", ")),
         ));
     }
     Ok(false)
@@ -293,13 +259,7 @@ fn check_binary_length(def: &ElementDef, body: &[u8], file: &str) -> Result<(), 
     })
 }
 
-fn body_error(
-    e: &ParseError,
-    file: &str,
-    def: &ElementDef,
-    start_line: usize,
-    header: &Header,
-) -> ScanError {
+fn body_error(e: &ParseError, file: &str, def: &ElementDef, start_line: usize, header: &Header) -> ScanError {
     let index = e.line().map(|l| l.saturating_sub(start_line));
     if e.kind() == ErrorKind::UnexpectedEof {
         let detail = match (header.encoding, index) {
@@ -318,14 +278,7 @@ fn body_error(
 }
 
 /// Maps a parse error in the vertex element; for ascii, names a `nan`/`inf` token precisely.
-fn vertex_error(
-    e: &ParseError,
-    file: &str,
-    def: &ElementDef,
-    start_line: usize,
-    body: &[u8],
-    header: &Header,
-) -> ScanError {
+fn vertex_error(e: &ParseError, file: &str, def: &ElementDef, start_line: usize, body: &[u8], header: &Header) -> ScanError {
     if header.encoding == Encoding::Ascii
         && e.kind() != ErrorKind::UnexpectedEof
         && let Some(vertex) = e.line().map(|l| l.saturating_sub(start_line))
@@ -340,13 +293,11 @@ fn vertex_error(
 /// The first token of an ascii vertex line that spells a non-finite number, with its property
 /// (the grammar of ply-rs-bw rejects such tokens, so this only runs on the error path).
 fn non_finite_token(line: &str, def: &ElementDef) -> Option<(String, String)> {
-    let all_scalar =
-        def.properties.values().all(|p| matches!(p.data_type, PropertyType::Scalar(_)));
+    let all_scalar = def.properties.values().all(|p| matches!(p.data_type, PropertyType::Scalar(_)));
     for (i, token) in line.split_ascii_whitespace().enumerate() {
         let lower = token.to_ascii_lowercase();
         let unsigned = lower.trim_start_matches(['+', '-']);
-        let spelled =
-            matches!(unsigned, "nan" | "inf" | "infinity" | "1.#inf" | "1.#qnan" | "1.#ind");
+        let spelled = matches!(unsigned, "nan" | "inf" | "infinity" | "1.#inf" | "1.#qnan" | "1.#ind");
         if spelled || token.parse::<f64>().is_ok_and(|v| !v.is_finite()) {
             let property = if all_scalar {
                 def.properties.keys().nth(i).cloned().unwrap_or_else(|| format!("value {i}"))
@@ -360,16 +311,9 @@ fn non_finite_token(line: &str, def: &ElementDef) -> Option<(String, String)> {
 }
 
 fn check_finite(vertices: &[RawVertex], file: &str) -> Result<(), ScanError> {
-    let Some((vertex, v)) =
-        vertices.iter().enumerate().find(|(_, v)| !v.position.iter().all(|c| c.is_finite()))
-    else {
+    let Some((vertex, v)) = vertices.iter().enumerate().find(|(_, v)| !v.position.iter().all(|c| c.is_finite())) else {
         return Ok(());
     };
     let axis = v.position.iter().position(|c| !c.is_finite()).unwrap_or(0);
-    Err(ScanError::NonFinite {
-        file: file.to_owned(),
-        vertex,
-        property: COORDINATES[axis].to_owned(),
-        value: v.position[axis].to_string(),
-    })
+    Err(ScanError::NonFinite { file: file.to_owned(), vertex, property: COORDINATES[axis].to_owned(), value: v.position[axis].to_string() })
 }

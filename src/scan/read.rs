@@ -26,12 +26,7 @@ pub fn read_scan(ply_path: &Path) -> Result<(Scan, Vec<Warning>), ScanError> {
     let ply = crate::io::read_bytes(ply_path)?;
     let labels_path = ply_path.with_extension("json");
     let labels = crate::io::read_optional_string(&labels_path)?;
-    read_scan_bytes(
-        &ply,
-        &ply_path.display().to_string(),
-        labels.as_deref(),
-        &labels_path.display().to_string(),
-    )
+    read_scan_bytes(&ply, &ply_path.display().to_string(), labels.as_deref(), &labels_path.display().to_string())
 }
 
 /// Reads a scan from memory: `ply` is the PLY file, `labels_json` the labels file (`None` when it
@@ -59,40 +54,26 @@ pub fn read_scan_bytes(
         ));
         None
     };
-    let mut groups =
-        group_by_part(&ply_data.vertices, ply_data.has_normals, &mut warnings, ply_name);
+    let mut groups = group_by_part(&ply_data.vertices, ply_data.has_normals, &mut warnings, ply_name);
     if let Some(labels) = &labels
-        && let Some(&part) = labels
-            .parts
-            .keys()
-            .find(|&&id| groups.parts.binary_search_by_key(&id, |g| g.id).is_err())
+        && let Some(&part) = labels.parts.keys().find(|&&id| groups.parts.binary_search_by_key(&id, |g| g.id).is_err())
     {
-        return Err(ScanError::UnknownLabelPart {
-            file: labels_name.to_owned(),
-            part,
-            ply: ply_name.to_owned(),
-        });
+        return Err(ScanError::UnknownLabelPart { file: labels_name.to_owned(), part, ply: ply_name.to_owned() });
     }
 
     let mut scan = Scan { source: ply_name.to_owned(), ..Scan::default() };
     scan.background = std::mem::take(&mut groups.background);
     for group in groups.parts.drain(..) {
-        let Some(part) = build_part(group, labels.as_ref(), &mut warnings, &mut scan.background)
-        else {
+        let Some(part) = build_part(group, labels.as_ref(), &mut warnings, &mut scan.background) else {
             continue;
         };
-        scan.objects.entry(part.object).or_insert_with(|| ScanObject {
-            id: part.object,
-            category: object_category(part.object, labels.as_ref(), &mut warnings),
-        });
+        scan.objects
+            .entry(part.object)
+            .or_insert_with(|| ScanObject { id: part.object, category: object_category(part.object, labels.as_ref(), &mut warnings) });
         scan.parts.push(part);
     }
     if scan.parts.is_empty() {
-        warnings.push(Warning::new(
-            "scan",
-            ply_name,
-            "the scan has no parts: every point is background",
-        ));
+        warnings.push(Warning::new("scan", ply_name, "the scan has no parts: every point is background"));
     }
     Ok((scan, warnings))
 }
@@ -112,12 +93,7 @@ struct Groups {
     background: Vec<Vec3>,
 }
 
-fn group_by_part(
-    vertices: &[RawVertex],
-    has_normals: bool,
-    warnings: &mut Vec<Warning>,
-    ply_name: &str,
-) -> Groups {
+fn group_by_part(vertices: &[RawVertex], has_normals: bool, warnings: &mut Vec<Warning>, ply_name: &str) -> Groups {
     let mut parts: Vec<PartGroup> = Vec::new();
     let mut index_of: HashMap<PartId, usize> = HashMap::new();
     let mut background = Vec::new();
@@ -137,12 +113,7 @@ fn group_by_part(
             Some((id, i)) if id == v.part => i,
             _ => {
                 let i = *index_of.entry(v.part).or_insert_with(|| {
-                    parts.push(PartGroup {
-                        id: v.part,
-                        points: Vec::new(),
-                        normals: Vec::new(),
-                        object_votes: Vec::new(),
-                    });
+                    parts.push(PartGroup { id: v.part, points: Vec::new(), normals: Vec::new(), object_votes: Vec::new() });
                     parts.len() - 1
                 });
                 last = Some((v.part, i));
@@ -164,11 +135,7 @@ fn group_by_part(
         for (id, n) in &other_negative {
             let _ = write!(list, "{}{id} ({n} points)", if list.is_empty() { "" } else { ", " });
         }
-        warnings.push(Warning::new(
-            "scan",
-            ply_name,
-            format!("negative part ids other than -1 treated as background: {list}"),
-        ));
+        warnings.push(Warning::new("scan", ply_name, format!("negative part ids other than -1 treated as background: {list}")));
     }
     // Part ids are unique, so an unstable sort is deterministic.
     parts.sort_unstable_by_key(|p| p.id);
@@ -180,12 +147,7 @@ fn describe_votes(votes: &[(ObjectId, usize)]) -> String {
 }
 
 /// Applies the labels to one part; `None` (points moved to `background`) when its object is -1.
-fn build_part(
-    mut group: PartGroup,
-    labels: Option<&Labels>,
-    warnings: &mut Vec<Warning>,
-    background: &mut Vec<Vec3>,
-) -> Option<ScanPart> {
+fn build_part(mut group: PartGroup, labels: Option<&Labels>, warnings: &mut Vec<Warning>, background: &mut Vec<Vec3>) -> Option<ScanPart> {
     let subject = format!("part {}", group.id);
     // Majority object of the points; ties go to an assigned id, then the smallest.
     group.object_votes.sort_by_key(|&(o, n)| (std::cmp::Reverse(n), o == UNASSIGNED, o));
@@ -196,10 +158,7 @@ fn build_part(
             warnings.push(Warning::new(
                 "scan",
                 subject.as_str(),
-                format!(
-                    "the labels say object {labelled}, its points say {}; using {labelled}",
-                    describe_votes(&group.object_votes)
-                ),
+                format!("the labels say object {labelled}, its points say {}; using {labelled}", describe_votes(&group.object_votes)),
             ));
         }
         labelled
@@ -208,10 +167,7 @@ fn build_part(
             warnings.push(Warning::new(
                 "scan",
                 subject.as_str(),
-                format!(
-                    "its points disagree on the object: {}; using the majority, {majority}",
-                    describe_votes(&group.object_votes)
-                ),
+                format!("its points disagree on the object: {}; using the majority, {majority}", describe_votes(&group.object_votes)),
             ));
         }
         majority
@@ -220,10 +176,7 @@ fn build_part(
         warnings.push(Warning::new(
             "scan",
             subject,
-            format!(
-                "belongs to object {object} (unassigned): its {} points are treated as background",
-                group.points.len()
-            ),
+            format!("belongs to object {object} (unassigned): its {} points are treated as background", group.points.len()),
         ));
         background.append(&mut group.points);
         return None;
@@ -233,22 +186,14 @@ fn build_part(
         l.to_owned()
     } else {
         if labels.is_some() {
-            warnings.push(Warning::new(
-                "scan",
-                subject.as_str(),
-                "no label in the labels file: using \"unknown\"",
-            ));
+            warnings.push(Warning::new("scan", subject.as_str(), "no label in the labels file: using \"unknown\""));
         }
         UNKNOWN_LABEL.to_owned()
     };
     let normals = if group.normals.is_empty() {
         None
     } else if let Some(bad) = group.normals.iter().position(|n| !n.is_finite()) {
-        warnings.push(Warning::new(
-            "scan",
-            subject,
-            format!("normal {bad} is not finite: the part's normals are dropped"),
-        ));
+        warnings.push(Warning::new("scan", subject, format!("normal {bad} is not finite: the part's normals are dropped")));
         None
     } else {
         Some(group.normals)
@@ -256,22 +201,13 @@ fn build_part(
     Some(ScanPart { id: group.id, object, label, points: group.points, normals })
 }
 
-fn object_category(
-    object: ObjectId,
-    labels: Option<&Labels>,
-    warnings: &mut Vec<Warning>,
-) -> String {
+fn object_category(object: ObjectId, labels: Option<&Labels>, warnings: &mut Vec<Warning>) -> String {
     match labels.and_then(|l| l.objects.get(&object)) {
         Some(Some(category)) if !category.trim().is_empty() => category.clone(),
         found => {
             if labels.is_some() {
-                let why =
-                    if found.is_some() { "has no category" } else { "is not in the labels file" };
-                warnings.push(Warning::new(
-                    "scan",
-                    format!("object {object}"),
-                    format!("{why}: using \"{UNKNOWN_CATEGORY}\""),
-                ));
+                let why = if found.is_some() { "has no category" } else { "is not in the labels file" };
+                warnings.push(Warning::new("scan", format!("object {object}"), format!("{why}: using \"{UNKNOWN_CATEGORY}\"")));
             }
             UNKNOWN_CATEGORY.to_owned()
         }

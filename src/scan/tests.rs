@@ -18,11 +18,7 @@ const LABELS_NAME: &str = "t.json";
 
 /// Reads `ply` (ascii text or binary bytes) with optional labels and checks the outcome. Errors
 /// must also name the file they are about.
-fn check(
-    ply: impl AsRef<[u8]>,
-    labels: Option<&str>,
-    expected: Expect,
-) -> Option<(Scan, Vec<Warning>)> {
+fn check(ply: impl AsRef<[u8]>, labels: Option<&str>, expected: Expect) -> Option<(Scan, Vec<Warning>)> {
     let result = read_scan_bytes(ply.as_ref(), PLY_NAME, labels, LABELS_NAME);
     match (result, expected) {
         (Ok((scan, warnings)), Expect::Ok { parts, points, background }) => {
@@ -39,21 +35,12 @@ fn check(
         }
         (Err(e), Expect::Err(needle)) => {
             let message = e.to_string();
-            assert!(
-                message.contains(needle),
-                "expected error containing {needle:?}, got: {message}"
-            );
-            assert!(
-                message.contains(PLY_NAME) || message.contains(LABELS_NAME),
-                "error names the file: {message}"
-            );
+            assert!(message.contains(needle), "expected error containing {needle:?}, got: {message}");
+            assert!(message.contains(PLY_NAME) || message.contains(LABELS_NAME), "error names the file: {message}");
             None
         }
         (Ok((scan, w)), Expect::Err(needle)) => {
-            panic!(
-                "expected an error containing {needle:?}, read {} parts; warnings {w:?}",
-                scan.parts.len()
-            )
+            panic!("expected an error containing {needle:?}, read {} parts; warnings {w:?}", scan.parts.len())
         }
         (Err(e), Expect::Ok { .. }) => panic!("expected Ok, got error: {e}"),
     }
@@ -92,18 +79,12 @@ fn binary_ply(encoding: &str, rows: &[([f32; 3], i32, i32)]) -> Vec<u8> {
 }
 
 fn sample_rows() -> Vec<([f32; 3], i32, i32)> {
-    vec![
-        ([0.0, 0.0, 0.0], 3, 17),
-        ([1.0, 0.5, 0.25], 3, 17),
-        ([0.0, 1.0, 0.0], 3, 18),
-        ([9.0, 9.0, 9.0], -1, -1),
-    ]
+    vec![([0.0, 0.0, 0.0], 3, 17), ([1.0, 0.5, 0.25], 3, 17), ([0.0, 1.0, 0.0], 3, 18), ([9.0, 9.0, 9.0], -1, -1)]
 }
 
 #[test]
 fn ascii_reads_parts_labels_and_background() {
-    let (scan, warnings) =
-        check(ascii_5(), Some(LABELS), Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
+    let (scan, warnings) = check(ascii_5(), Some(LABELS), Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
     assert_eq!(scan.source, PLY_NAME);
     let drawer = scan.part(17).unwrap();
@@ -119,12 +100,10 @@ fn ascii_reads_parts_labels_and_background() {
 
 #[test]
 fn ascii_round_trip_through_bytes() {
-    let (scan, _) =
-        check(ascii_5(), Some(LABELS), Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
+    let (scan, _) = check(ascii_5(), Some(LABELS), Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
     let bytes = scan_to_ply_bytes(&scan);
     let json = labels_json(&scan);
-    let (again, warnings) =
-        check(&bytes, Some(&json), Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
+    let (again, warnings) = check(&bytes, Some(&json), Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
     assert_same(&scan, &again);
 }
@@ -145,10 +124,8 @@ fn binary_round_trip_through_files_with_normals() {
     let mut scan = Scan { source: "made".into(), ..Scan::default() };
     scan.objects.insert(3, ScanObject { id: 3, category: "cabinet".into() });
     scan.objects.insert(70_000, ScanObject { id: 70_000, category: "chair \"big\"".into() });
-    for (id, object, label, n) in [(17, 3, "drawer", 4), (5, 70_000, "leg", 3), (-0, 3, "body", 2)]
-    {
-        let points: Vec<Vec3> =
-            (0..n).map(|i| Vec3::new(i as f32 * 0.1, id as f32, -1.5e-3)).collect();
+    for (id, object, label, n) in [(17, 3, "drawer", 4), (5, 70_000, "leg", 3), (-0, 3, "body", 2)] {
+        let points: Vec<Vec3> = (0..n).map(|i| Vec3::new(i as f32 * 0.1, id as f32, -1.5e-3)).collect();
         let normals = Some(points.iter().map(|p| (*p + Vec3::ONE).normalize()).collect());
         scan.parts.push(ScanPart { id, object, label: label.into(), points, normals });
     }
@@ -247,9 +224,7 @@ property float nx\nproperty float ny\nproperty float nz\nproperty int object\npr
 
 #[test]
 fn errors_name_the_file_and_what_was_expected() {
-    let h = |props: &str, n: usize| {
-        format!("ply\nformat ascii 1.0\nelement vertex {n}\n{props}end_header\n")
-    };
+    let h = |props: &str, n: usize| format!("ply\nformat ascii 1.0\nelement vertex {n}\n{props}end_header\n");
     let xyz = "property float x\nproperty float y\nproperty float z\n";
     let ids = "property int object\nproperty int part\n";
     let cases: Vec<(String, Option<&str>, &str)> = vec![
@@ -258,12 +233,24 @@ fn errors_name_the_file_and_what_was_expected() {
         ("solid cube\nfacet normal 0 0 1\n".into(), None, "not \"ply\""),
         ("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n".into(), None, "end_header"),
         ("ply\nelement vertex 1\nend_header\n".into(), None, "format"),
-        ("ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n".into(), None, "found elements: face"),
+        (
+            "ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n".into(),
+            None,
+            "found elements: face",
+        ),
         (format!("{}0 0 0 1\n", h(&format!("{xyz}property int object\n"), 1)), None, "no property `part`"),
         (format!("{}0 0 1 1\n", h(&format!("property float x\nproperty float y\n{ids}"), 1)), None, "no property `z`"),
-        (format!("{}0 0 0 1 1.5\n", h(&format!("{xyz}property int object\nproperty float part\n"), 1)), None, "`part` has type float; expected an integer type"),
+        (
+            format!("{}0 0 0 1 1.5\n", h(&format!("{xyz}property int object\nproperty float part\n"), 1)),
+            None,
+            "`part` has type float; expected an integer type",
+        ),
         (format!("{}0 0 0 1 1\n", h(&format!("{xyz}property double object\nproperty int part\n"), 1)), None, "`object` has type double"),
-        (format!("{}0 0 0 1 1\n", h(&format!("property float x\nproperty float y\nproperty list uchar float z\n{ids}"), 1)), None, "`z` has type list uchar float; expected float or double"),
+        (
+            format!("{}0 0 0 1 1\n", h(&format!("property float x\nproperty float y\nproperty list uchar float z\n{ids}"), 1)),
+            None,
+            "`z` has type list uchar float; expected float or double",
+        ),
         (format!("{}0 0 0 1 1\n1 1 1 1 1\n0 0 nan 1 1\n", h(&format!("{xyz}{ids}"), 3)), None, "vertex 2 has a non-finite `z` (nan)"),
         (format!("{}0 0 0 1 1\n-inf 0 0 1 1\n", h(&format!("{xyz}{ids}"), 2)), None, "vertex 1 has a non-finite `x` (-inf)"),
         (format!("{}0 0 0 1 1\n0 1e39 0 1 1\n", h(&format!("{xyz}{ids}"), 2)), None, "vertex 1 has a non-finite `y` (inf)"),
@@ -271,9 +258,17 @@ fn errors_name_the_file_and_what_was_expected() {
         (format!("{}0 0 0 1 1\nzero 0 0 1 1\n", h(&format!("{xyz}{ids}"), 2)), None, "at `vertex` element 1"),
         (format!("{}0 0 0 1 1\n1 1 1 1 1\n", h(&format!("{xyz}{ids}"), 4)), None, "expected 4 `vertex` elements, the file ends after 2"),
         (format!("{}0 0 0 1 -1\n", h(&format!("{xyz}property uchar object\nproperty uchar part\n"), 1)), None, "at `vertex` element 0"),
-        (ascii_5(), Some(r#"{"objects": {}, "parts": {"17": {"object": 3, "label": "drawer"}, "99": {"label": "lid"}}}"#), "labels name part 99, which is not in the scan t.ply"),
+        (
+            ascii_5(),
+            Some(r#"{"objects": {}, "parts": {"17": {"object": 3, "label": "drawer"}, "99": {"label": "lid"}}}"#),
+            "labels name part 99, which is not in the scan t.ply",
+        ),
         (ascii_5(), Some(r#"{"parts": {"-1": {"label": "floor"}}}"#), "part -1"),
-        (ascii_5(), Some("{\"objects\": {\"3\": {\"category\": \"cabinet\"}},\n \"parts\": {\"17\": {\"object\": 3 \"label\": 1}}}"), "line 2 column"),
+        (
+            ascii_5(),
+            Some("{\"objects\": {\"3\": {\"category\": \"cabinet\"}},\n \"parts\": {\"17\": {\"object\": 3 \"label\": 1}}}"),
+            "line 2 column",
+        ),
         (ascii_5(), Some(r#"{"parts": {"17": {"object": "three"}}}"#), "malformed labels JSON"),
         (ascii_5(), Some("[1, 2]"), "malformed labels JSON"),
         (ascii_5(), Some(r#"{"parts": {"drawer": {"object": 3}}}"#), "key \"drawer\" in `parts` is not an integer id"),
@@ -288,19 +283,13 @@ fn errors_name_the_file_and_what_was_expected() {
 fn binary_nan_and_truncation_are_errors() {
     let mut rows = sample_rows();
     rows[2].0[1] = f32::NAN;
-    check(
-        binary_ply("binary_little_endian", &rows),
-        None,
-        Expect::Err("vertex 2 has a non-finite `y` (NaN)"),
-    );
+    check(binary_ply("binary_little_endian", &rows), None, Expect::Err("vertex 2 has a non-finite `y` (NaN)"));
 
     let whole = binary_ply("binary_little_endian", &sample_rows());
     check(
         &whole[..whole.len() - 3],
         None,
-        Expect::Err(
-            "truncated: the header declares 4 vertices of 20 bytes (80 bytes), but only 77 bytes",
-        ),
+        Expect::Err("truncated: the header declares 4 vertices of 20 bytes (80 bytes), but only 77 bytes"),
     );
     let header_len = whole.len() - 80;
     check(&whole[..header_len], None, Expect::Err("only 0 bytes follow the header"));
@@ -313,23 +302,14 @@ fn binary_nan_and_truncation_are_errors() {
 
 #[test]
 fn big_endian_binary_reads_the_same() {
-    let little = check(
-        binary_ply("binary_little_endian", &sample_rows()),
-        None,
-        Expect::Ok { parts: 2, points: 4, background: 1 },
-    );
-    let big = check(
-        binary_ply("binary_big_endian", &sample_rows()),
-        None,
-        Expect::Ok { parts: 2, points: 4, background: 1 },
-    );
+    let little = check(binary_ply("binary_little_endian", &sample_rows()), None, Expect::Ok { parts: 2, points: 4, background: 1 });
+    let big = check(binary_ply("binary_big_endian", &sample_rows()), None, Expect::Ok { parts: 2, points: 4, background: 1 });
     assert_same(&little.unwrap().0, &big.unwrap().0);
 }
 
 #[test]
 fn a_part_with_three_points_is_read() {
-    let ply =
-        format!("{HEADER_XYZ_OBJ_PART}0 0 0 1 5\n1 0 0 1 5\n0 1 0 1 5\n0 0 9 -1 -1\n0 0 8 -1 -1\n");
+    let ply = format!("{HEADER_XYZ_OBJ_PART}0 0 0 1 5\n1 0 0 1 5\n0 1 0 1 5\n0 0 9 -1 -1\n0 0 8 -1 -1\n");
     let (scan, _) = check(&ply, None, Expect::Ok { parts: 1, points: 5, background: 2 }).unwrap();
     assert_eq!(scan.parts[0].points.len(), 3);
 }
@@ -341,11 +321,7 @@ property int object\nproperty int part\nelement face 1\nproperty list uchar int 
 0 0 0 1 2\n1 0 0 1 2\n0 1 0 1 2\n3 0 1 2\n";
     check(faces_after, None, Expect::Ok { parts: 1, points: 3, background: 0 });
     // A broken face list after the vertices does not matter: faces are never parsed.
-    check(
-        faces_after.replace("3 0 1 2\n", "3 0 oops"),
-        None,
-        Expect::Ok { parts: 1, points: 3, background: 0 },
-    );
+    check(faces_after.replace("3 0 1 2\n", "3 0 oops"), None, Expect::Ok { parts: 1, points: 3, background: 0 });
     // Faces before the vertices are skipped.
     let faces_first = "ply\nformat ascii 1.0\nelement face 2\nproperty list uchar int vertex_indices\n\
 element vertex 2\nproperty float x\nproperty float y\nproperty float z\nproperty int object\nproperty int part\n\
@@ -367,15 +343,13 @@ end_header\n"
     binary.extend_from_slice(&7_i16.to_le_bytes());
     check(&binary, None, Expect::Err("truncated"));
     binary.extend_from_slice(&8_i16.to_le_bytes());
-    let (scan, _) =
-        check(&binary, None, Expect::Ok { parts: 1, points: 1, background: 0 }).unwrap();
+    let (scan, _) = check(&binary, None, Expect::Ok { parts: 1, points: 1, background: 0 }).unwrap();
     assert_eq!((scan.parts[0].id, scan.parts[0].points[0]), (8, Vec3::new(0.5, 0.0, 0.0)));
 }
 
 #[test]
 fn missing_labels_warn_once_and_label_unknown() {
-    let (scan, warnings) =
-        check(ascii_5(), None, Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
+    let (scan, warnings) = check(ascii_5(), None, Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
     assert_eq!(warnings.len(), 1, "{warnings:?}");
     assert!(warnings[0].message.contains("labels file not found"), "{warnings:?}");
     assert_eq!(warnings[0].subject, LABELS_NAME);
@@ -385,10 +359,8 @@ fn missing_labels_warn_once_and_label_unknown() {
 
 #[test]
 fn partial_labels_warn_per_part_and_object() {
-    let labels =
-        r#"{"objects": {"4": {"category": "desk"}}, "parts": {"17": {"label": "drawer"}}}"#;
-    let (scan, warnings) =
-        check(ascii_5(), Some(labels), Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
+    let labels = r#"{"objects": {"4": {"category": "desk"}}, "parts": {"17": {"label": "drawer"}}}"#;
+    let (scan, warnings) = check(ascii_5(), Some(labels), Expect::Ok { parts: 2, points: 5, background: 1 }).unwrap();
     assert_eq!(scan.part(17).unwrap().label, "drawer");
     assert_eq!(scan.part(17).unwrap().object, 3, "object from the points");
     assert_eq!(scan.part(18).unwrap().label, UNKNOWN_LABEL);
@@ -402,26 +374,18 @@ fn partial_labels_warn_per_part_and_object() {
 fn object_majority_disagreement_and_unassigned_objects() {
     let body = "0 0 0 3 1\n0 0 1 3 1\n0 0 2 5 1\n1 0 0 -1 2\n1 0 1 -1 2\n2 0 0 6 3\n2 0 1 7 3\n";
     let ply = format!("{HEADER_XYZ_OBJ_PART}{body}").replace("vertex 5", "vertex 7");
-    let (scan, warnings) =
-        check(&ply, None, Expect::Ok { parts: 2, points: 7, background: 2 }).unwrap();
+    let (scan, warnings) = check(&ply, None, Expect::Ok { parts: 2, points: 7, background: 2 }).unwrap();
     assert_eq!(scan.part(1).unwrap().object, 3, "majority");
     assert_eq!(scan.part(3).unwrap().object, 6, "tie goes to the smaller id");
     assert!(scan.part(2).is_none(), "object -1: background");
     assert_eq!(scan.background, vec![Vec3::X, Vec3::new(1.0, 0.0, 1.0)]);
     let text: Vec<String> = warnings.iter().map(ToString::to_string).collect();
-    assert!(
-        text.iter().any(|w| w.contains("part 1") && w.contains("3 (2 points), 5 (1 points)")),
-        "{text:?}"
-    );
-    assert!(
-        text.iter().any(|w| w.contains("part 2") && w.contains("treated as background")),
-        "{text:?}"
-    );
+    assert!(text.iter().any(|w| w.contains("part 1") && w.contains("3 (2 points), 5 (1 points)")), "{text:?}");
+    assert!(text.iter().any(|w| w.contains("part 2") && w.contains("treated as background")), "{text:?}");
 
     // The labels' object wins over the points, with a warning; object -1 in the labels → background.
     let labels = r#"{"objects": {"5": {"category": "box"}}, "parts": {"1": {"object": 5, "label": "lid"}, "3": {"object": -1}}}"#;
-    let (scan, warnings) =
-        check(&ply, Some(labels), Expect::Ok { parts: 1, points: 7, background: 4 }).unwrap();
+    let (scan, warnings) = check(&ply, Some(labels), Expect::Ok { parts: 1, points: 7, background: 4 }).unwrap();
     assert_eq!((scan.parts[0].id, scan.parts[0].object, scan.category(5)), (1, 5, "box"));
     assert!(warnings.iter().any(|w| w.message.contains("the labels say object 5")), "{warnings:?}");
 }
@@ -431,11 +395,7 @@ fn garbage_never_panics() {
     check([0xff_u8, 0xfe, 0x00, 0x12, 0x80, b'\n', 0xc3], None, Expect::Err("not \"ply\""));
     check(b"ply\n\xff\xfe\x00garbage\n", None, Expect::Err("unreadable header"));
     check(b"ply", None, Expect::Err("unreadable header"));
-    check(
-        "ply\nformat ascii 1.0\nelement vertex 99999999999999999999\nend_header\n",
-        None,
-        Expect::Err("unreadable header"),
-    );
+    check("ply\nformat ascii 1.0\nelement vertex 99999999999999999999\nend_header\n", None, Expect::Err("unreadable header"));
 
     // Mutations and truncations of valid files: any error is fine, a panic is not.
     let mut rng = crate::math::rng(7);
@@ -463,18 +423,10 @@ fn read_500k_points_timing() {
     let mut rng = crate::math::rng(1);
     for id in 0..150 {
         scan.objects.entry(id / 5).or_insert(ScanObject { id: id / 5, category: "cabinet".into() });
-        let points =
-            (0..3000).map(|_| Vec3::new(rng.random(), rng.random(), rng.random())).collect();
-        scan.parts.push(ScanPart {
-            id,
-            object: id / 5,
-            label: "door".into(),
-            points,
-            normals: None,
-        });
+        let points = (0..3000).map(|_| Vec3::new(rng.random(), rng.random(), rng.random())).collect();
+        scan.parts.push(ScanPart { id, object: id / 5, label: "door".into(), points, normals: None });
     }
-    scan.background =
-        (0..50_000).map(|_| Vec3::new(rng.random(), rng.random(), rng.random())).collect();
+    scan.background = (0..50_000).map(|_| Vec3::new(rng.random(), rng.random(), rng.random())).collect();
     let bytes = scan_to_ply_bytes(&scan);
     let json = labels_json(&scan);
     let start = std::time::Instant::now();
@@ -496,8 +448,7 @@ fn read_500k_points_timing() {
         let _ = writeln!(ascii, "{} {} {} -1 -1", p.x, p.y, p.z);
     }
     let start = std::time::Instant::now();
-    let (again_ascii, _) =
-        read_scan_bytes(ascii.as_bytes(), "big.ply", Some(&json), "big.json").unwrap();
+    let (again_ascii, _) = read_scan_bytes(ascii.as_bytes(), "big.ply", Some(&json), "big.json").unwrap();
     let ascii_s = start.elapsed().as_secs_f64();
     assert_same(&again, &again_ascii);
     println!("500k points: binary {binary_s:.3} s, ascii {ascii_s:.3} s");

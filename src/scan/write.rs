@@ -12,8 +12,7 @@ use crate::math::Vec3;
 
 /// Whether every part carries one normal per point (then normals are written).
 fn writes_normals(scan: &Scan) -> bool {
-    !scan.parts.is_empty()
-        && scan.parts.iter().all(|p| p.normals.as_ref().is_some_and(|n| n.len() == p.points.len()))
+    !scan.parts.is_empty() && scan.parts.iter().all(|p| p.normals.as_ref().is_some_and(|n| n.len() == p.points.len()))
 }
 
 /// An id as the PLY `int` it is written as: ids beyond the 32-bit range saturate

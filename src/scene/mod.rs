@@ -52,11 +52,7 @@ pub struct SceneGraph {
 /// back to the lowest primitive bottom when there is no background.
 #[must_use]
 pub fn estimate_floor(background: &[Vec3], objects: &[SceneObject]) -> f32 {
-    let lowest_part = objects
-        .iter()
-        .flat_map(|o| o.parts.iter())
-        .map(|(_, p)| p.aabb().0.z)
-        .fold(f32::INFINITY, f32::min);
+    let lowest_part = objects.iter().flat_map(|o| o.parts.iter()).map(|(_, p)| p.aabb().0.z).fold(f32::INFINITY, f32::min);
     if background.len() < 50 {
         return if lowest_part.is_finite() { lowest_part } else { 0.0 };
     }
@@ -177,12 +173,15 @@ pub fn build_scene(objects: &mut [SceneObject], floor_z: f32, cfg: &SceneConfig)
             }
         }
         let id = objects[i].id;
-        let (support_part, support_object, height) = match best {
-            Some((_, part, obj, h)) => (part, obj, h),
-            None => {
-                warnings.push(Warning::new("scene", format!("object {id}"), format!("rests on nothing (bottom at {bottom:.3} m, floor at {floor_z:.3} m); placed on the floor")));
-                (None, None, floor_z)
-            }
+        let (support_part, support_object, height) = if let Some((_, part, obj, h)) = best {
+            (part, obj, h)
+        } else {
+            warnings.push(Warning::new(
+                "scene",
+                format!("object {id}"),
+                format!("rests on nothing (bottom at {bottom:.3} m, floor at {floor_z:.3} m); placed on the floor"),
+            ));
+            (None, None, floor_z)
         };
         // Set the object down on its support.
         let dz = height - bottom;
@@ -198,7 +197,10 @@ pub fn build_scene(objects: &mut [SceneObject], floor_z: f32, cfg: &SceneConfig)
     for a in 0..objects.len() {
         for b in (a + 1)..objects.len() {
             let (ia, ib) = (objects[a].id, objects[b].id);
-            let supported = graph.relations.iter().any(|r| r.kind == RelationKind::Support && ((r.from == Some(ia) && r.to == ib) || (r.from == Some(ib) && r.to == ia)));
+            let supported = graph
+                .relations
+                .iter()
+                .any(|r| r.kind == RelationKind::Support && ((r.from == Some(ia) && r.to == ib) || (r.from == Some(ib) && r.to == ia)));
             if supported {
                 continue;
             }
@@ -260,9 +262,20 @@ mod tests {
         let mw = SceneObject {
             id: 2,
             root_part: 20,
-            parts: vec![(20, Primitive::new(crate::primitive::PrimitiveKind::Cuboid, Vec3::new(0.5, 0.35, 0.3), Pose::from_parts(Vec3::new(0.1, 0.0, 0.92), tilt)))],
+            parts: vec![(
+                20,
+                Primitive::new(
+                    crate::primitive::PrimitiveKind::Cuboid,
+                    Vec3::new(0.5, 0.35, 0.3),
+                    Pose::from_parts(Vec3::new(0.1, 0.0, 0.92), tilt),
+                ),
+            )],
         };
-        let chair = SceneObject { id: 3, root_part: 30, parts: vec![(30, Primitive::cuboid_at(Vec3::new(0.0, 0.55, 0.22), Vec3::new(0.4, 0.2, 0.44)))] };
+        let chair = SceneObject {
+            id: 3,
+            root_part: 30,
+            parts: vec![(30, Primitive::cuboid_at(Vec3::new(0.0, 0.55, 0.22), Vec3::new(0.4, 0.2, 0.44)))],
+        };
         let mut objects = vec![mw, table, chair];
         let (graph, warnings) = build_scene(&mut objects, 0.0, &SceneConfig::default());
         assert!(warnings.is_empty(), "{warnings:?}");

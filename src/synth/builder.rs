@@ -78,14 +78,7 @@ impl Furniture {
     }
 
     /// Adds a part sliding along `axis_object` from 0 to `upper_m`, origin at its centre.
-    pub fn add_prismatic(
-        &mut self,
-        parent: usize,
-        label: &'static str,
-        shape: Primitive,
-        axis_object: Vec3,
-        upper_m: f32,
-    ) -> usize {
+    pub fn add_prismatic(&mut self, parent: usize, label: &'static str, shape: Primitive, axis_object: Vec3, upper_m: f32) -> usize {
         let child = self.add_part(label, shape);
         self.joints.push(LocalJoint {
             parent,
@@ -177,11 +170,7 @@ impl Furniture {
             .map(|(i, p)| TruthPart {
                 id: part_id(i),
                 label: p.label.to_string(),
-                shapes: p
-                    .shapes
-                    .iter()
-                    .map(|s| Primitive::new(s.kind, s.size, world_from_object * s.world_from_primitive))
-                    .collect(),
+                shapes: p.shapes.iter().map(|s| Primitive::new(s.kind, s.size, world_from_object * s.world_from_primitive)).collect(),
             })
             .collect();
         let joints = self
@@ -197,8 +186,7 @@ impl Furniture {
                 upper: j.upper,
             })
             .collect::<Vec<_>>();
-        let contact_edges =
-            joints.iter().map(|j| if j.parent < j.child { [j.parent, j.child] } else { [j.child, j.parent] }).collect();
+        let contact_edges = joints.iter().map(|j| if j.parent < j.child { [j.parent, j.child] } else { [j.child, j.parent] }).collect();
         TruthObject { id: object_id, category: self.category.to_string(), supported_by, parts, joints, contact_edges }
     }
 }
@@ -213,11 +201,7 @@ pub fn box_between(min: Vec3, max: Vec3) -> Primitive {
 #[must_use]
 pub fn cylinder_along(axis: Vec3, center: Vec3, diameter_m: f32, length_m: f32) -> Primitive {
     let rotation = Quat::from_rotation_arc(Vec3::Z, axis.normalize_or(Vec3::Z));
-    Primitive::new(
-        PrimitiveKind::Cylinder,
-        Vec3::new(diameter_m, diameter_m, length_m),
-        Pose::from_parts(center, rotation),
-    )
+    Primitive::new(PrimitiveKind::Cylinder, Vec3::new(diameter_m, diameter_m, length_m), Pose::from_parts(center, rotation))
 }
 
 #[cfg(test)]

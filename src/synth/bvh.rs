@@ -129,13 +129,7 @@ impl Bvh {
 
     /// Closest hit of a ray (unit `dir`) within `max_dist`: (primitive index, distance, normal).
     #[must_use]
-    pub fn ray_cast(
-        &self,
-        primitives: &[Primitive],
-        origin: Vec3,
-        dir: Vec3,
-        max_dist: f32,
-    ) -> Option<(usize, f32, Vec3)> {
+    pub fn ray_cast(&self, primitives: &[Primitive], origin: Vec3, dir: Vec3, max_dist: f32) -> Option<(usize, f32, Vec3)> {
         if self.order.is_empty() {
             return None;
         }
@@ -258,11 +252,7 @@ mod tests {
             if let Some((t, n)) = ray_cast_exact(&cyl, origin, dir, 10.0) {
                 hits += 1;
                 let q = origin + dir * t;
-                assert!(
-                    cyl.surface_distance(q) < 1e-5,
-                    "hit {q} off the surface by {}, t {t}, n {n}",
-                    cyl.surface_distance(q)
-                );
+                assert!(cyl.surface_distance(q) < 1e-5, "hit {q} off the surface by {}, t {t}, n {n}", cyl.surface_distance(q));
                 assert!(n.dot(dir) < 0.0);
                 // The first hit: nothing of the cylinder lies on the ray before it.
                 assert!((0..400).all(|k| !cyl.contains(origin + dir * (t * k as f32 / 400.0 - 1e-4))));

@@ -182,10 +182,7 @@ pub fn cabinet(rng: &mut SynthRng, layout: CabinetLayout) -> Furniture {
     let style = HandleStyle::random(rng);
     let front_y = 0.5 * depth;
     let mut f = Furniture::new("cabinet");
-    let body = f.add_part(
-        "body",
-        box_between(Vec3::new(-0.5 * width, -0.5 * depth, 0.0), Vec3::new(0.5 * width, 0.5 * depth, height)),
-    );
+    let body = f.add_part("body", box_between(Vec3::new(-0.5 * width, -0.5 * depth, 0.0), Vec3::new(0.5 * width, 0.5 * depth, height)));
     let (x_lo, x_hi) = (-0.5 * width + margin, 0.5 * width - margin);
     let (z_lo, z_hi) = (margin, height - margin);
     let drawer_column = |f: &mut Furniture, rng: &mut SynthRng, n: usize, z0: f32, z1: f32| {
@@ -235,10 +232,7 @@ pub fn microwave(rng: &mut SynthRng) -> Furniture {
     let style = HandleStyle::random(rng);
     let front_y = 0.5 * depth;
     let mut f = Furniture::new("microwave");
-    let body = f.add_part(
-        "body",
-        box_between(Vec3::new(-0.5 * width, -0.5 * depth, 0.0), Vec3::new(0.5 * width, 0.5 * depth, height)),
-    );
+    let body = f.add_part("body", box_between(Vec3::new(-0.5 * width, -0.5 * depth, 0.0), Vec3::new(0.5 * width, 0.5 * depth, height)));
     let hinge = if rng.random_bool(0.25) { Hinge::Bottom } else { Hinge::Left };
     let door = (-0.5 * width + margin, 0.5 * width - panel, margin, height - margin);
     let handle_len = uniform(rng, 0.12, 0.2);
@@ -266,10 +260,7 @@ pub fn table(rng: &mut SynthRng) -> Furniture {
     let round = rng.random_bool(0.5);
     let mut f = Furniture::new("table");
     let under = height - top_t;
-    let top = f.add_part(
-        "top",
-        box_between(Vec3::new(-0.5 * width, -0.5 * depth, under), Vec3::new(0.5 * width, 0.5 * depth, height)),
-    );
+    let top = f.add_part("top", box_between(Vec3::new(-0.5 * width, -0.5 * depth, under), Vec3::new(0.5 * width, 0.5 * depth, height)));
     add_legs(&mut f, top, width, depth, under, leg_w, inset, round);
     f.centred()
 }
@@ -277,13 +268,8 @@ pub fn table(rng: &mut SynthRng) -> Furniture {
 /// Four legs from the floor to the underside (`under`) of a `width × depth` root part.
 fn add_legs(f: &mut Furniture, root: usize, width: f32, depth: f32, under: f32, leg_w: f32, inset: f32, round: bool) {
     for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
-        let c =
-            Vec3::new(sx * (0.5 * width - inset - 0.5 * leg_w), sy * (0.5 * depth - inset - 0.5 * leg_w), 0.5 * under);
-        let leg = if round {
-            cylinder_along(Vec3::Z, c, leg_w, under)
-        } else {
-            Primitive::cuboid_at(c, Vec3::new(leg_w, leg_w, under))
-        };
+        let c = Vec3::new(sx * (0.5 * width - inset - 0.5 * leg_w), sy * (0.5 * depth - inset - 0.5 * leg_w), 0.5 * under);
+        let leg = if round { cylinder_along(Vec3::Z, c, leg_w, under) } else { Primitive::cuboid_at(c, Vec3::new(leg_w, leg_w, under)) };
         f.add_fixed(root, "leg", leg);
     }
 }
@@ -301,15 +287,10 @@ pub fn chair(rng: &mut SynthRng) -> Furniture {
     let round = rng.random_bool(0.4);
     let mut f = Furniture::new("chair");
     let under = seat_top - seat_t;
-    let seat = f.add_part(
-        "seat",
-        box_between(Vec3::new(-0.5 * width, -0.5 * depth, under), Vec3::new(0.5 * width, 0.5 * depth, seat_top)),
-    );
+    let seat = f.add_part("seat", box_between(Vec3::new(-0.5 * width, -0.5 * depth, under), Vec3::new(0.5 * width, 0.5 * depth, seat_top)));
     add_legs(&mut f, seat, width, depth, under, leg_w, inset, round);
-    let back = box_between(
-        Vec3::new(-0.5 * width, -0.5 * depth, seat_top),
-        Vec3::new(0.5 * width, -0.5 * depth + back_t, seat_top + back_h),
-    );
+    let back =
+        box_between(Vec3::new(-0.5 * width, -0.5 * depth, seat_top), Vec3::new(0.5 * width, -0.5 * depth + back_t, seat_top + back_h));
     f.add_fixed(seat, "back", back);
     f.centred()
 }
@@ -326,10 +307,8 @@ pub fn bed(rng: &mut SynthRng) -> Furniture {
     let head_h = uniform(rng, 0.9, 1.2);
     let head_extra = uniform(rng, 0.0, 0.06);
     let mut f = Furniture::new("bed");
-    let frame = f.add_part(
-        "frame",
-        box_between(Vec3::new(-0.5 * width, -0.5 * length, 0.0), Vec3::new(0.5 * width, 0.5 * length, frame_h)),
-    );
+    let frame =
+        f.add_part("frame", box_between(Vec3::new(-0.5 * width, -0.5 * length, 0.0), Vec3::new(0.5 * width, 0.5 * length, frame_h)));
     let mattress = box_between(
         Vec3::new(-0.5 * width + inset, -0.5 * length + inset, frame_h),
         Vec3::new(0.5 * width - inset, 0.5 * length - inset, frame_h + mattress_t),
@@ -355,10 +334,7 @@ pub fn refrigerator(rng: &mut SynthRng) -> Furniture {
     let style = HandleStyle::random(rng);
     let front_y = 0.5 * depth;
     let mut f = Furniture::new("refrigerator");
-    let body = f.add_part(
-        "body",
-        box_between(Vec3::new(-0.5 * width, -0.5 * depth, 0.0), Vec3::new(0.5 * width, 0.5 * depth, height)),
-    );
+    let body = f.add_part("body", box_between(Vec3::new(-0.5 * width, -0.5 * depth, 0.0), Vec3::new(0.5 * width, 0.5 * depth, height)));
     let (x_lo, x_hi, z_lo, z_hi) = (-0.5 * width + margin, 0.5 * width - margin, margin, height - margin);
     let hinge = if rng.random_bool(0.5) { Hinge::Left } else { Hinge::Right };
     let handle_len = uniform(rng, 0.25, 0.6);

@@ -100,14 +100,7 @@ impl Layout<'_> {
     }
 
     /// Adds the object without checks; returns its id.
-    fn commit(
-        &mut self,
-        f: &Furniture,
-        center: Vec2,
-        yaw: f32,
-        base_z: f32,
-        supported_by: Option<ObjectId>,
-    ) -> ObjectId {
+    fn commit(&mut self, f: &Furniture, center: Vec2, yaw: f32, base_z: f32, supported_by: Option<ObjectId>) -> ObjectId {
         let id = self.ids.next_object;
         self.ids.next_object += 1;
         let (lo, hi) = f.footprint();

@@ -201,13 +201,10 @@ fn is_free(truth: &GroundTruth, xy: Vec2) -> bool {
 
 /// World bounds of an object's shapes.
 fn object_bounds(object: &TruthObject) -> (Vec3, Vec3) {
-    object.parts.iter().flat_map(|p| p.shapes.iter()).fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), s| {
-            let (a, b) = s.aabb();
-            (lo.min(a), hi.max(b))
-        },
-    )
+    object.parts.iter().flat_map(|p| p.shapes.iter()).fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), s| {
+        let (a, b) = s.aabb();
+        (lo.min(a), hi.max(b))
+    })
 }
 
 /// Sum of the horizontal directions an object's movable parts face (the outward normal of each

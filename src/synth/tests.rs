@@ -133,9 +133,7 @@ fn doors_hinge_on_their_edge_and_open_outwards() {
                 if j.axis_world.z.abs() < 0.5 {
                     bottom_or_top += 1;
                 }
-                let turn = |angle: f32, p: Vec3| {
-                    Quat::from_axis_angle(j.axis_world, angle) * (p - j.origin_world) + j.origin_world
-                };
+                let turn = |angle: f32, p: Vec3| Quat::from_axis_angle(j.axis_world, angle) * (p - j.origin_world) + j.origin_world;
                 let body_center = body.center();
                 let before = (door.center() - body_center).length();
                 let after = (turn(0.3, door.center()) - body_center).length();
@@ -167,12 +165,7 @@ fn drawers_slide_out_of_the_front() {
             // Along the body's front normal: parallel to one of its axes, horizontal.
             assert!(body.axes_world().iter().any(|a| a.dot(j.axis_world).abs() > 0.9999));
             assert!(j.axis_world.z.abs() < 1e-4);
-            let depth = body
-                .axes_world()
-                .iter()
-                .zip(body.size.to_array())
-                .find(|(a, _)| a.dot(j.axis_world).abs() > 0.9)
-                .map(|(_, s)| s);
+            let depth = body.axes_world().iter().zip(body.size.to_array()).find(|(a, _)| a.dot(j.axis_world).abs() > 0.9).map(|(_, s)| s);
             let depth = depth.expect("depth axis");
             assert!(j.upper >= 0.79 * depth && j.upper <= 0.91 * depth, "limit {} for depth {depth}", j.upper);
             assert!((j.origin_world - drawer.center()).length() < 1e-4);
@@ -185,11 +178,8 @@ fn drawers_slide_out_of_the_front() {
 fn parts_touch_where_they_are_joined_and_never_interpenetrate() {
     for seed in 0..3 {
         let truth = demo_room(seed);
-        let all: Vec<(PartId, ObjectIdOf, &Primitive)> = truth
-            .objects
-            .iter()
-            .flat_map(|o| o.parts.iter().flat_map(move |p| p.shapes.iter().map(move |s| (p.id, o.id, s))))
-            .collect();
+        let all: Vec<(PartId, ObjectIdOf, &Primitive)> =
+            truth.objects.iter().flat_map(|o| o.parts.iter().flat_map(move |p| p.shapes.iter().map(move |s| (p.id, o.id, s)))).collect();
         for (i, (pa, _, a)) in all.iter().enumerate() {
             for (pb, _, b) in &all[i + 1..] {
                 assert_eq!(penetration(a, b, 0.001), 0, "seed {seed}: part {pa} enters part {pb}");
@@ -259,10 +249,8 @@ fn demo_scan_is_deterministic_and_labels_every_part() {
 #[test]
 fn scan_points_lie_on_their_labelled_parts() {
     let truth = demo_truth();
-    let shapes: BTreeMap<PartId, &TruthPart> =
-        truth.objects.iter().flat_map(|o| o.parts.iter()).map(|p| (p.id, p)).collect();
-    let dist =
-        |id: PartId, p: Vec3| shapes[&id].shapes.iter().map(|s| s.surface_distance(p)).fold(f32::INFINITY, f32::min);
+    let shapes: BTreeMap<PartId, &TruthPart> = truth.objects.iter().flat_map(|o| o.parts.iter()).map(|p| (p.id, p)).collect();
+    let dist = |id: PartId, p: Vec3| shapes[&id].shapes.iter().map(|s| s.surface_distance(p)).fold(f32::INFINITY, f32::min);
     // Noisy default scan: nearly every point within 3 cm of its part (bleed ≤ 1.5 cm, noise a few mm).
     let noisy = demo_scan();
     let (mut near, mut all) = (0usize, 0usize);

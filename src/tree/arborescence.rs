@@ -28,6 +28,7 @@ pub fn max_arborescence(n: usize, root: usize, edges: &[WeightedEdge]) -> Option
 }
 
 fn solve(n: usize, root: usize, edges: &[WeightedEdge]) -> Option<Vec<usize>> {
+    const NONE: usize = usize::MAX;
     // 1. Best incoming edge of every node.
     let mut best: Vec<Option<usize>> = vec![None; n];
     for (k, e) in edges.iter().enumerate() {
@@ -46,7 +47,6 @@ fn solve(n: usize, root: usize, edges: &[WeightedEdge]) -> Option<Vec<usize>> {
         parent[v] = edges[best[v]?].from;
     }
     // 2. Cycles among the chosen edges.
-    const NONE: usize = usize::MAX;
     let mut cycle_of = vec![NONE; n];
     let mut visited_from = vec![NONE; n];
     let mut cycles = 0;
@@ -135,9 +135,8 @@ mod tests {
 
     /// Exhaustive optimum: every choice of one incoming edge per non-root node that forms a tree.
     fn brute_force(n: usize, root: usize, edges: &[WeightedEdge]) -> Option<f64> {
-        let incoming: Vec<Vec<usize>> = (0..n)
-            .map(|v| (0..edges.len()).filter(|&k| edges[k].to == v && edges[k].from != v).collect())
-            .collect();
+        let incoming: Vec<Vec<usize>> =
+            (0..n).map(|v| (0..edges.len()).filter(|&k| edges[k].to == v && edges[k].from != v).collect()).collect();
         let nodes: Vec<usize> = (0..n).filter(|&v| v != root).collect();
         let mut best: Option<f64> = None;
         let mut idx = vec![0usize; nodes.len()];

@@ -139,7 +139,11 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
             (Some(&c), Some(&p)) if c != p => {
                 forced.insert(c, p);
             }
-            (Some(_), _) => warnings.push(Warning::new("tree", format!("part {child}"), format!("pinned parent {parent} is not a part of the same object; pin ignored"))),
+            (Some(_), _) => warnings.push(Warning::new(
+                "tree",
+                format!("part {child}"),
+                format!("pinned parent {parent} is not a part of the same object; pin ignored"),
+            )),
             _ => {}
         }
     }
@@ -173,7 +177,11 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
         match edge_pairs[k] {
             Some((p, c)) => {
                 if !contacts.contains_key(&(p, c)) && !forced_parent.contains_key(&c) {
-                    warnings.push(Warning::new("tree", format!("part {c}"), format!("touches no other part; attached to the nearest part {p} by a fixed joint")));
+                    warnings.push(Warning::new(
+                        "tree",
+                        format!("part {c}"),
+                        format!("touches no other part; attached to the nearest part {p} by a fixed joint"),
+                    ));
                 }
                 parent.insert(c, p);
             }
