@@ -66,3 +66,46 @@ pub(super) fn sample_surface(r: f32, hz: f32, n: usize) -> Vec<Vec3> {
     }
     out
 }
+
+/// First hit of a ray (local frame, from outside) with the cylinder: (distance, outward normal).
+/// Closed form: parry casts rays on cylinders by an iterative support-map search that lands up
+/// to a few millimetres off the surface, too coarse for a depth scanner or for picking.
+pub(super) fn ray_cast(r: f32, hz: f32, o: Vec3, d: Vec3, max_dist: f32) -> Option<(f32, Vec3)> {
+    // Start the ray just outside the bounding sphere: solving from far away loses digits to
+    // cancellation.
+    let shift = (-o.dot(d) / d.length_squared().max(1e-12) - (r + hz)).max(0.0);
+    let o = o + d * shift;
+    let mut best: Option<(f32, Vec3)> = None;
+    let mut consider = |t: f32, n: Vec3| {
+        let t = t + shift;
+        if t >= shift && t <= max_dist && best.is_none_or(|(bt, _)| t < bt) {
+            best = Some((t, n));
+        }
+    };
+    let a = d.x * d.x + d.y * d.y;
+    if a > 1e-12 {
+        let b = 2.0 * (o.x * d.x + o.y * d.y);
+        let c = o.x * o.x + o.y * o.y - r * r;
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            let t = (-b - disc.sqrt()) / (2.0 * a);
+            let q = o + d * t;
+            if q.z.abs() <= hz {
+                consider(t, Vec3::new(q.x, q.y, 0.0).normalize_or(Vec3::X));
+            }
+        }
+    }
+    if d.z.abs() > 1e-12 {
+        for side in [-1.0_f32, 1.0] {
+            if d.z * side >= 0.0 {
+                continue; // the ray leaves through this cap
+            }
+            let t = (side * hz - o.z) / d.z;
+            let q = o + d * t;
+            if q.x * q.x + q.y * q.y <= r * r {
+                consider(t, Vec3::Z * side);
+            }
+        }
+    }
+    best
+}

@@ -198,6 +198,7 @@ impl Primitive {
     }
 
     /// First hit of a world ray (origin, unit direction) within `max_dist`: (distance, outward normal).
+    /// Cylinders in closed form (see `cylinder::ray_cast`), the other kinds through parry3d.
     #[must_use]
     pub fn ray_cast(&self, origin: Vec3, dir: Vec3, max_dist: f32) -> Option<(f32, Vec3)> {
         use parry3d::query::{Ray, RayCast};
@@ -213,9 +214,7 @@ impl Primitive {
             PrimitiveKind::Sphere => parry3d::shape::Ball::new(h.x)
                 .cast_local_ray_and_get_normal(&Ray::new(o, d), max_dist, false)
                 .map(|i| (i.time_of_impact, i.normal)),
-            PrimitiveKind::Cylinder => parry3d::shape::Cylinder::new(h.z, h.x)
-                .cast_local_ray_and_get_normal(&Ray::new(swap(o), swap(d)), max_dist, false)
-                .map(|i| (i.time_of_impact, swap(i.normal))),
+            PrimitiveKind::Cylinder => cylinder::ray_cast(h.x, h.z, o, d, max_dist),
             PrimitiveKind::Capsule => parry3d::shape::Capsule::new_y((h.z - h.x).max(0.0), h.x)
                 .cast_local_ray_and_get_normal(&Ray::new(swap(o), swap(d)), max_dist, false)
                 .map(|i| (i.time_of_impact, swap(i.normal))),
@@ -326,6 +325,30 @@ mod tests {
         let p = Primitive::cuboid_at(Vec3::ZERO, Vec3::new(2.0, 1.0, 4.0));
         let c = p.closest_surface_point(Vec3::new(0.1, 0.3, 0.0));
         assert!((c - Vec3::new(0.1, 0.5, 0.0)).length() < 1e-6);
+    }
+    #[test]
+    fn exact_cylinder_hits_lie_on_the_surface() {
+        use crate::math::{Pose, Quat};
+        let pose = Pose::from_parts(Vec3::new(0.3, -0.2, 1.0), Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.3, 0.8));
+        let cyl = Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.04, 0.04, 0.02), pose);
+        let mut hits = 0;
+        for k in 0..400 {
+            let a = k as f32 * 0.61;
+            let origin = cyl.center() + Vec3::new(a.cos() * 2.0, a.sin() * 2.0, (a * 0.3).sin() * 1.5);
+            let aim = cyl.center() + Vec3::new((a * 3.1).sin(), (a * 2.3).cos(), (a * 1.3).sin()) * 0.02;
+            let dir = (aim - origin).normalize();
+            if let Some((t, n)) = cyl.ray_cast(origin, dir, 10.0) {
+                hits += 1;
+                let q = origin + dir * t;
+                assert!(cyl.surface_distance(q) < 1e-5, "hit {q} off the surface by {}, t {t}, n {n}", cyl.surface_distance(q));
+                assert!(n.dot(dir) < 0.0);
+                // The first hit: nothing of the cylinder lies on the ray before it.
+                assert!((0..400).all(|k| !cyl.contains(origin + dir * (t * k as f32 / 400.0 - 1e-4))));
+            } else {
+                assert!((0..4000).all(|k| !cyl.contains(origin + dir * (k as f32 * 0.001))), "missed ray {k}");
+            }
+        }
+        assert!(hits > 150, "{hits} hits");
     }
 }
 

@@ -2,7 +2,7 @@
 //! neighbourhood queries. Built once per scan; deterministic (median splits, index tie-breaks).
 
 use crate::math::Vec3;
-use crate::primitive::{Primitive, PrimitiveKind};
+use crate::primitive::Primitive;
 
 const LEAF_SIZE: usize = 4;
 
@@ -31,57 +31,6 @@ fn ray_box(origin: Vec3, inv_dir: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> Optio
     let t_near = t0.min(t1).max_element().max(0.0);
     let t_far = t0.max(t1).min_element().min(t_max);
     (t_near <= t_far).then_some(t_near)
-}
-
-/// First hit of a ray from outside a primitive: (distance, outward normal). Cylinders are
-/// intersected in closed form here, because parry casts rays on cylinders with an iterative
-/// support-map search that lands up to a few millimetres off the surface; the other kinds go
-/// through [`Primitive::ray_cast`], which is exact for them.
-#[must_use]
-pub fn ray_cast_exact(p: &Primitive, origin: Vec3, dir: Vec3, max_dist: f32) -> Option<(f32, Vec3)> {
-    if p.kind != PrimitiveKind::Cylinder {
-        return p.ray_cast(origin, dir, max_dist);
-    }
-    let o = p.world_from_primitive.inverse_transform_point(origin);
-    let d = p.world_from_primitive.inverse_transform_vector(dir);
-    let (r, h) = (0.5 * p.size.x, 0.5 * p.size.z);
-    // Start the ray just outside the cylinder's bounding sphere: solving from far away loses
-    // digits to cancellation.
-    let shift = (-o.dot(d) / d.length_squared().max(1e-12) - (r + h)).max(0.0);
-    let o = o + d * shift;
-    let mut best: Option<(f32, Vec3)> = None;
-    let mut consider = |t: f32, n: Vec3| {
-        let t = t + shift;
-        if t >= shift && t <= max_dist && best.is_none_or(|(bt, _)| t < bt) {
-            best = Some((t, n));
-        }
-    };
-    let a = d.x * d.x + d.y * d.y;
-    if a > 1e-12 {
-        let b = 2.0 * (o.x * d.x + o.y * d.y);
-        let c = o.x * o.x + o.y * o.y - r * r;
-        let disc = b * b - 4.0 * a * c;
-        if disc >= 0.0 {
-            let t = (-b - disc.sqrt()) / (2.0 * a);
-            let q = o + d * t;
-            if q.z.abs() <= h {
-                consider(t, Vec3::new(q.x, q.y, 0.0).normalize_or(Vec3::X));
-            }
-        }
-    }
-    if d.z.abs() > 1e-12 {
-        for side in [-1.0_f32, 1.0] {
-            if d.z * side >= 0.0 {
-                continue; // the ray leaves through this cap
-            }
-            let t = (side * h - o.z) / d.z;
-            let q = o + d * t;
-            if q.x * q.x + q.y * q.y <= r * r {
-                consider(t, Vec3::Z * side);
-            }
-        }
-    }
-    best.map(|(t, n)| (t, p.world_from_primitive.transform_vector(n)))
 }
 
 impl Bvh {
@@ -150,7 +99,7 @@ impl Bvh {
                     if ray_box(origin, inv_dir, lo, hi, t_max).is_none() {
                         continue;
                     }
-                    if let Some((t, normal)) = ray_cast_exact(&primitives[i], origin, dir, t_max) {
+                    if let Some((t, normal)) = primitives[i].ray_cast(origin, dir, t_max) {
                         let better = match best {
                             None => true,
                             Some((j, bt, _)) => t.total_cmp(&bt).then(i.cmp(&j)).is_lt(),
@@ -231,37 +180,13 @@ mod tests {
             let brute = prims
                 .iter()
                 .enumerate()
-                .filter_map(|(i, p)| ray_cast_exact(p, origin, dir, 100.0).map(|(t, _)| (i, t)))
+                .filter_map(|(i, p)| p.ray_cast(origin, dir, 100.0).map(|(t, _)| (i, t)))
                 .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
             let got = bvh.ray_cast(&prims, origin, dir, 100.0).map(|(i, t, _)| (i, t));
             assert_eq!(got.map(|g| g.0), brute.map(|b| b.0), "ray {k}");
         }
     }
 
-    #[test]
-    fn exact_cylinder_hits_lie_on_the_surface() {
-        use crate::math::{Pose, Quat};
-        let pose = Pose::from_parts(Vec3::new(0.3, -0.2, 1.0), Quat::from_euler(glam::EulerRot::XYZ, 0.4, -0.3, 0.8));
-        let cyl = Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.04, 0.04, 0.02), pose);
-        let mut hits = 0;
-        for k in 0..400 {
-            let a = k as f32 * 0.61;
-            let origin = cyl.center() + Vec3::new(a.cos() * 2.0, a.sin() * 2.0, (a * 0.3).sin() * 1.5);
-            let aim = cyl.center() + Vec3::new((a * 3.1).sin(), (a * 2.3).cos(), (a * 1.3).sin()) * 0.02;
-            let dir = (aim - origin).normalize();
-            if let Some((t, n)) = ray_cast_exact(&cyl, origin, dir, 10.0) {
-                hits += 1;
-                let q = origin + dir * t;
-                assert!(cyl.surface_distance(q) < 1e-5, "hit {q} off the surface by {}, t {t}, n {n}", cyl.surface_distance(q));
-                assert!(n.dot(dir) < 0.0);
-                // The first hit: nothing of the cylinder lies on the ray before it.
-                assert!((0..400).all(|k| !cyl.contains(origin + dir * (t * k as f32 / 400.0 - 1e-4))));
-            } else {
-                assert!((0..4000).all(|k| !cyl.contains(origin + dir * (k as f32 * 0.001))), "missed ray {k}");
-            }
-        }
-        assert!(hits > 150, "{hits} hits");
-    }
 
     #[test]
     fn near_query_finds_neighbours() {
