@@ -13,6 +13,7 @@ pub mod kinematics;
 pub mod math;
 pub mod model;
 pub mod pipeline;
+pub mod polygon;
 pub mod primitive;
 pub mod refine;
 pub mod report;

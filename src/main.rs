@@ -21,8 +21,9 @@ struct Cli {
     /// Machine-readable JSON on stdout instead of the human summary (no progress bars).
     #[arg(long, global = true)]
     json: bool,
+    /// Without a command: the demo on the built-in room (seed 0), written to `out/demo`.
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
 }
 
 #[derive(Subcommand)]
@@ -101,7 +102,8 @@ impl Progress for Bars {
 
 fn main() -> Result<()> {
     let cli = Cli::parse();
-    match cli.command {
+    let command = cli.command.unwrap_or(Command::Demo { seed: 0, count: 1, clean: false, out: Some(PathBuf::from("out/demo")) });
+    match command {
         Command::Demo { seed, count, clean, out } => demo(seed, count, clean, out.as_deref(), cli.json),
         Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, cli.json),
         Command::Eval { scene, truth, scan } => eval_cmd(&scene, &truth, scan.as_deref(), cli.json),
@@ -205,9 +207,9 @@ fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, json: bool) -> R
         bars.finish();
         let secs = t.elapsed().as_secs_f64();
         let evaluated = evaluate_both(&scene, &truth, &scan, Some(s));
-        if let Some(dir) = out {
-            let dir = if count > 1 { dir.join(format!("seed-{s}")) } else { dir.to_path_buf() };
-            write_outputs(&dir, &scene)?;
+        let dir = out.map(|dir| if count > 1 { dir.join(format!("seed-{s}")) } else { dir.to_path_buf() });
+        if let Some(dir) = &dir {
+            write_outputs(dir, &scene)?;
             write_scan(&scan, &dir.join("scan.ply"))?;
             atomic_write(&dir.join("gt.json"), serde_json::to_string_pretty(&truth)?.as_bytes())?;
             atomic_write(&dir.join("eval.json"), serde_json::to_string_pretty(&evaluated)?.as_bytes())?;
@@ -216,7 +218,11 @@ fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, json: bool) -> R
             print_warnings(&scene);
             println!("seed {s}: {} points scanned in {scan_secs:.2} s; {}", scan.point_count(), summary(&scene, secs));
             println!("{}", evaluated.part_level);
-            println!("object-level baseline: {}\n", evaluated.object_level);
+            println!("object-level baseline: {}", evaluated.object_level);
+            if let Some(dir) = &dir {
+                println!("wrote scan.ply, scan.json, gt.json, scene.urdf, scene.json, eval.json to {}", dir.display());
+            }
+            println!();
         }
         runs.push(evaluated);
     }

@@ -13,7 +13,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::fit::{FitConfig, fit_part};
-use crate::kinematics::{Joint, JointKind, KinematicsConfig, estimate_joint, joint_kind_for_label, label_tokens};
+use crate::kinematics::{
+    Joint, JointKind, KinematicsConfig, estimate_joint, is_base_label, is_handle_label, joint_kind_for_label, label_tokens,
+};
 use crate::math::Vec3;
 use crate::model::{ContactEdge, ObjectModel, PartModel, SceneModel};
 use crate::primitive::{Primitive, PrimitiveKind};
@@ -135,10 +137,6 @@ fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits) {
     });
 }
 
-fn is_base_label(label: &str) -> bool {
-    label_tokens(label).any(|t| matches!(t.as_str(), "body" | "base" | "frame" | "top" | "carcass" | "cabinet"))
-}
-
 /// Re-fits `fitted` with its axes snapped onto `reference`'s; `None` when the axes are not within
 /// 45° of a permutation of the reference's or the fit gets worse.
 fn coalign(points: &[Vec3], fitted: &Primitive, reference: &Primitive, err_before: f32) -> Option<(Primitive, f32)> {
@@ -167,9 +165,7 @@ fn coalign(points: &[Vec3], fitted: &Primitive, reference: &Primitive, err_befor
             break;
         }
     }
-    let step = (points.len() / 4000).max(1);
-    let (sum, n) = points.iter().step_by(step).fold((0.0_f32, 0usize), |(s, n), p| (s + candidate.surface_distance(*p), n + 1));
-    let err_after = sum / n.max(1) as f32;
+    let err_after = candidate.mean_surface_distance(points, 4000);
     (err_after <= (err_before * 1.2).max(err_before + 0.001)).then_some((candidate, err_after))
 }
 
@@ -212,9 +208,8 @@ fn prefer_box_for_boards(label: &str, points: &[Vec3], fit: crate::fit::PartFit)
     if cuboid.score > fit.score * 1.25 {
         return fit;
     }
-    let step = (points.len() / 4000).max(1);
-    let (sum, n) = points.iter().step_by(step).fold((0.0_f32, 0usize), |(s, n), p| (s + cuboid.primitive.surface_distance(*p), n + 1));
-    crate::fit::PartFit { primitive: cuboid.primitive, fit_error: sum / n.max(1) as f32, score: cuboid.score, candidates: fit.candidates }
+    let fit_error = cuboid.primitive.mean_surface_distance(points, 4000);
+    crate::fit::PartFit { primitive: cuboid.primitive, fit_error, score: cuboid.score, candidates: fit.candidates }
 }
 
 /// Runs the whole pipeline on a scan.
@@ -322,10 +317,6 @@ pub fn assemble(
     (scene, stats)
 }
 
-fn is_handle(label: &str) -> bool {
-    label_tokens(label).any(|t| matches!(t.as_str(), "handle" | "handles" | "pull" | "grip" | "bar" | "knob"))
-}
-
 fn make_joint(
     tree: &PartTree,
     parent: PartId,
@@ -341,7 +332,7 @@ fn make_joint(
     let handle = tree
         .children(child)
         .into_iter()
-        .find(|c| labels.get(c).is_some_and(|l| is_handle(l)))
+        .find(|c| labels.get(c).is_some_and(|l| is_handle_label(l) || label_tokens(l).any(|t| t == "knob")))
         .and_then(|c| prims.get(&c))
         .map(Primitive::center);
     let (Some(pp), Some(cp)) = (prims.get(&parent), prims.get(&child)) else {

@@ -2,9 +2,8 @@
 //! Align / Dist / Cont, and the directed candidate parent → child edges.
 
 mod planes;
-mod polygon;
 mod relation;
 
+pub use crate::polygon::{convex_intersection, polygon_area};
 pub use planes::{SurfacePlane, surface_planes};
-pub use polygon::{convex_intersection, polygon_area};
 pub use relation::{ContactConfig, PairContact, align, contact, contact_ratio, plane_distance};

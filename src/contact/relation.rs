@@ -13,8 +13,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::planes::{SurfacePlane, surface_planes};
-use super::polygon::{convex_intersection, polygon_area};
 use crate::math::{Vec2, Vec3};
+use crate::polygon::{convex_intersection, polygon_area};
 use crate::primitive::Primitive;
 
 /// Thresholds of the contact test (θa, θd, θc) and the edge-weight refinements.

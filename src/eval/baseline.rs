@@ -198,32 +198,17 @@ pub fn upright_box(points: &[Vec3]) -> Option<UprightBox> {
         z_lo = z_lo.min(p.z);
         z_hi = z_hi.max(p.z);
     }
-    let hull = convex_hull_2d(points.iter().map(|p| p.truncate()).collect());
-    // Candidate directions: each hull edge (the optimal rectangle has a side on one), and x.
-    let mut best: Option<(f32, Vec2, Vec2, Vec2)> = None; // (area, u, lo, hi) in (u, v) coordinates
-    let mut consider = |u: Vec2| {
-        let v = u.perp();
-        let mut lo = Vec2::splat(f32::INFINITY);
-        let mut hi = Vec2::splat(f32::NEG_INFINITY);
-        for p in &hull {
-            let q = Vec2::new(p.dot(u), p.dot(v));
-            lo = lo.min(q);
-            hi = hi.max(q);
-        }
-        let area = (hi - lo).x * (hi - lo).y;
-        if best.is_none_or(|b| area < b.0 - 1e-9) {
-            best = Some((area, u, lo, hi));
-        }
-    };
-    consider(Vec2::X);
-    for (i, a) in hull.iter().enumerate() {
-        let b = hull[(i + 1) % hull.len()];
-        let u = (b - *a).normalize_or_zero();
-        if u != Vec2::ZERO {
-            consider(u);
-        }
+    let hull = crate::polygon::convex_hull(points.iter().map(|p| p.truncate()).collect());
+    // The minimum-area rectangle has a side on a hull edge (rotating calipers).
+    let u = crate::polygon::min_area_rect_dir(&hull, 0.0);
+    let v = u.perp();
+    let mut lo = Vec2::splat(f32::INFINITY);
+    let mut hi = Vec2::splat(f32::NEG_INFINITY);
+    for p in &hull {
+        let q = Vec2::new(p.dot(u), p.dot(v));
+        lo = lo.min(q);
+        hi = hi.max(q);
     }
-    let (_, u, lo, hi) = best?;
     let mid = 0.5 * (lo + hi);
     let center_xy = u * mid.x + u.perp() * mid.y;
     Some(UprightBox {
@@ -231,29 +216,6 @@ pub fn upright_box(points: &[Vec3]) -> Option<UprightBox> {
         size_m: Vec3::new(hi.x - lo.x, hi.y - lo.y, z_hi - z_lo),
         yaw_rad: u.y.atan2(u.x),
     })
-}
-
-/// Convex hull of 2D points (Andrew's monotone chain), counter-clockwise, no collinear points.
-fn convex_hull_2d(mut points: Vec<Vec2>) -> Vec<Vec2> {
-    points.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    points.dedup();
-    if points.len() < 3 {
-        return points;
-    }
-    let cross = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
-    let mut hull: Vec<Vec2> = Vec::with_capacity(2 * points.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &Vec2>> = if pass == 0 { Box::new(points.iter()) } else { Box::new(points.iter().rev()) };
-        for p in iter {
-            while hull.len() >= start + 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], *p) <= 0.0 {
-                hull.pop();
-            }
-            hull.push(*p);
-        }
-        hull.pop(); // the last point starts the other chain
-    }
-    hull
 }
 
 #[cfg(test)]

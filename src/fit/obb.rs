@@ -10,6 +10,7 @@
 
 use super::subsample_stride;
 use crate::math::{Mat3, Pose, Quat, Vec2, Vec3, principal_axes};
+use crate::polygon::{convex_hull, min_area_rect_dir};
 
 /// Smallest extent a box (and a fitted primitive) reports, metres: flat or collinear point sets
 /// get this thickness instead of zero.
@@ -222,100 +223,12 @@ fn box_flush_with(verts: &[Vec3], normal: Vec3) -> Option<Oriented> {
     for p in verts {
         flat.push(Vec2::new(p.dot(u), p.dot(v)));
     }
-    let hull = convex_hull_2d(flat);
-    let dir = min_area_rect_dir(&hull);
+    let hull = convex_hull(flat);
+    let dir = min_area_rect_dir(&hull, MIN_EXTENT_M);
     let a1 = u * dir.x + v * dir.y;
     let a2 = u * -dir.y + v * dir.x;
     let axes = Mat3::from_cols(a1, a2, n);
     Some(Oriented { axes, volume: clamped_volume(verts, &axes) })
-}
-
-/// Convex hull of 2D points, counter-clockwise, no repeated or collinear vertices
-/// (Andrew's monotone chain).
-fn convex_hull_2d(mut pts: Vec<Vec2>) -> Vec<Vec2> {
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
-    }
-    // Turn test with a relative tolerance: nearly collinear vertices are dropped.
-    let cross = |o: Vec2, a: Vec2, b: Vec2| {
-        let (u, v) = (a - o, b - o);
-        u.perp_dot(v) - 1e-5 * u.length() * v.length()
-    };
-    let mut hull: Vec<Vec2> = Vec::with_capacity(pts.len() + 1);
-    for &p in &pts {
-        while hull.len() >= 2 && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
-            hull.pop();
-        }
-        hull.push(p);
-    }
-    let lower_len = hull.len() + 1;
-    for &p in pts.iter().rev().skip(1) {
-        while hull.len() >= lower_len && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0 {
-            hull.pop();
-        }
-        hull.push(p);
-    }
-    hull.pop(); // the first point again
-    hull
-}
-
-/// Direction (unit) of the first side of the minimum-area enclosing rectangle of a CCW convex
-/// polygon, by rotating calipers. Areas use extents clamped to [`MIN_EXTENT_M`] so segments and
-/// points get a sensible answer.
-fn min_area_rect_dir(h: &[Vec2]) -> Vec2 {
-    let m = h.len();
-    if m < 2 {
-        return Vec2::X;
-    }
-    if m == 2 {
-        return (h[1] - h[0]).try_normalize().unwrap_or(Vec2::X);
-    }
-    let next = |i: usize| (i + 1) % m;
-    let clamp = |x: f32| x.max(MIN_EXTENT_M);
-    let mut best_dir = Vec2::X;
-    let mut best_area = f32::INFINITY;
-    // Calipers: j = farthest along the edge, k = farthest from the edge, l = farthest backwards.
-    let (mut j, mut k, mut l) = (0usize, 0usize, 0usize);
-    for i in 0..m {
-        let Some(e) = (h[next(i)] - h[i]).try_normalize() else {
-            continue;
-        };
-        let nrm = e.perp(); // inward for a CCW polygon
-        if i == 0 {
-            j = next(i);
-        }
-        let mut steps = 0;
-        while (h[next(j)] - h[j]).dot(e) > 0.0 && steps < m {
-            j = next(j);
-            steps += 1;
-        }
-        if i == 0 {
-            k = j;
-        }
-        steps = 0;
-        while (h[next(k)] - h[k]).dot(nrm) > 0.0 && steps < m {
-            k = next(k);
-            steps += 1;
-        }
-        if i == 0 {
-            l = k;
-        }
-        steps = 0;
-        while (h[next(l)] - h[l]).dot(e) < 0.0 && steps < m {
-            l = next(l);
-            steps += 1;
-        }
-        let width = (h[j] - h[l]).dot(e);
-        let height = (h[k] - h[i]).dot(nrm);
-        let area = clamp(width) * clamp(height);
-        if area < best_area {
-            best_area = area;
-            best_dir = e;
-        }
-    }
-    best_dir
 }
 
 /// Deterministic coordinate descent over small rotations about the box's own axes.
@@ -505,21 +418,5 @@ mod tests {
             assert!(obb.center.is_finite() && obb.size.is_finite() && obb.size.min_element() >= MIN_EXTENT_M, "{obb:?}");
             assert!((obb.axes.determinant() - 1.0).abs() < 1e-4);
         }
-    }
-
-    #[test]
-    fn calipers_find_the_tilted_rectangle() {
-        let a = 0.4_f32;
-        let (e, n) = (Vec2::new(a.cos(), a.sin()), Vec2::new(-a.sin(), a.cos()));
-        let mut pts = Vec::new();
-        for i in 0..=10 {
-            for j in 0..=5 {
-                pts.push(e * (i as f32 * 0.2) + n * (j as f32 * 0.1) + Vec2::new(3.0, -1.0));
-            }
-        }
-        let hull = convex_hull_2d(pts);
-        assert_eq!(hull.len(), 4, "{hull:?}");
-        let d = min_area_rect_dir(&hull);
-        assert!(d.dot(e).abs() > 0.9999 || d.dot(n).abs() > 0.9999, "{d}");
     }
 }

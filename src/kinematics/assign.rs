@@ -40,12 +40,30 @@ pub fn label_tokens(label: &str) -> impl Iterator<Item = String> + '_ {
     label.split(|c: char| !c.is_ascii_alphabetic()).filter(|t| !t.is_empty()).map(str::to_ascii_lowercase)
 }
 
+/// A part an object is built on (body, base, frame, top): the preferred root of its tree.
+#[must_use]
+pub fn is_base_label(label: &str) -> bool {
+    label_tokens(label).any(|t| matches!(t.as_str(), "body" | "base" | "frame" | "top" | "carcass" | "cabinet"))
+}
+
+/// A grip mounted on a part to move it (handle, pull, grip, bar).
+#[must_use]
+pub fn is_handle_label(label: &str) -> bool {
+    label_tokens(label).any(|t| matches!(t.as_str(), "handle" | "handles" | "pull" | "grip" | "bar"))
+}
+
+/// A part that moves relative to its parent (door, drawer, lid, knob, button), not a grip.
+#[must_use]
+pub fn is_movable_label(label: &str) -> bool {
+    joint_kind_for_label(label).is_movable() && !is_handle_label(label)
+}
+
 /// The joint type a label calls for; unknown labels are rigid.
 #[must_use]
 pub fn joint_kind_for_label(label: &str) -> JointKind {
     let tokens: Vec<String> = label_tokens(label).collect();
     let has = |words: &[&str]| tokens.iter().any(|t| words.contains(&t.as_str()));
-    if has(&["handle", "handles", "pull", "grip", "bar"]) {
+    if is_handle_label(label) {
         JointKind::Fixed
     } else if has(&["knob", "knobs", "dial", "valve"]) {
         JointKind::Revolute

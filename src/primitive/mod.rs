@@ -108,6 +108,14 @@ impl Primitive {
         (self.closest_surface_point_local(p) - p).length()
     }
 
+    /// Mean distance from points to the surface, over a stride subsample of at most `max_points`.
+    #[must_use]
+    pub fn mean_surface_distance(&self, points: &[Vec3], max_points: usize) -> f32 {
+        let step = (points.len() / max_points.max(1)).max(1);
+        let (sum, n) = points.iter().step_by(step).fold((0.0_f32, 0usize), |(s, n), p| (s + self.surface_distance(*p), n + 1));
+        sum / n.max(1) as f32
+    }
+
     /// Closest surface point, in the primitive's frame.
     #[must_use]
     pub fn closest_surface_point_local(&self, p: Vec3) -> Vec3 {

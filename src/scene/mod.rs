@@ -6,9 +6,10 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::contact::{convex_intersection, polygon_area, surface_planes};
+use crate::contact::surface_planes;
 use crate::math::{Pose, Quat, UP, Vec2, Vec3};
 use crate::model::{ObjectRelation, RelationKind};
+use crate::polygon::{convex_hull, convex_intersection, polygon_area};
 use crate::primitive::Primitive;
 use crate::report::Warning;
 use crate::scan::{ObjectId, PartId};
@@ -56,7 +57,9 @@ pub fn estimate_floor(background: &[Vec3], objects: &[SceneObject]) -> f32 {
     if background.len() < 50 {
         return if lowest_part.is_finite() { lowest_part } else { 0.0 };
     }
-    let mut zs: Vec<f32> = background.iter().map(|p| p.z).collect();
+    // A stride subsample of at most 50k heights estimates a 1 cm slab as well as all of them.
+    let step = (background.len() / 50_000).max(1);
+    let mut zs: Vec<f32> = background.iter().step_by(step).map(|p| p.z).collect();
     zs.sort_by(f32::total_cmp);
     // The floor is the lowest dense horizontal slab: scan the lower quarter of heights.
     let lo = zs[zs.len() / 200];
@@ -92,35 +95,7 @@ fn footprint(obj: &SceneObject) -> (f32, Vec<Vec2>) {
             }
         }
     }
-    (bottom, convex_hull_2d(&pts))
-}
-
-/// Andrew's monotone chain; counter-clockwise.
-fn convex_hull_2d(points: &[Vec2]) -> Vec<Vec2> {
-    let mut pts = points.to_vec();
-    pts.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
-    }
-    let mut lower: Vec<Vec2> = Vec::new();
-    for p in &pts {
-        while lower.len() >= 2 && (lower[lower.len() - 1] - lower[lower.len() - 2]).perp_dot(*p - lower[lower.len() - 1]) <= 0.0 {
-            lower.pop();
-        }
-        lower.push(*p);
-    }
-    let mut upper: Vec<Vec2> = Vec::new();
-    for p in pts.iter().rev() {
-        while upper.len() >= 2 && (upper[upper.len() - 1] - upper[upper.len() - 2]).perp_dot(*p - upper[upper.len() - 1]) <= 0.0 {
-            upper.pop();
-        }
-        upper.push(*p);
-    }
-    lower.pop();
-    upper.pop();
-    lower.extend(upper);
-    lower
+    (bottom, convex_hull(pts))
 }
 
 /// Up-facing faces of a primitive: (height, xy outline).

@@ -187,7 +187,6 @@ mod tests {
         }
     }
 
-
     #[test]
     fn near_query_finds_neighbours() {
         let prims = grid();

@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use super::arborescence::{WeightedEdge, max_arborescence};
 use crate::contact::{ContactConfig, PairContact, contact};
+use crate::kinematics::{is_base_label, is_handle_label, is_movable_label};
 use crate::model::ContactEdge;
 use crate::primitive::Primitive;
 use crate::report::Warning;
@@ -38,14 +39,6 @@ impl Default for TreeConfig {
     fn default() -> Self {
         Self { contact: ContactConfig::default(), root_prior: 0.25, handle_prior: 1.5 }
     }
-}
-
-fn is_handle_label(label: &str) -> bool {
-    crate::kinematics::label_tokens(label).any(|t| matches!(t.as_str(), "handle" | "handles" | "pull" | "grip"))
-}
-
-fn is_movable_label(label: &str) -> bool {
-    crate::kinematics::joint_kind_for_label(label).is_movable() && !is_handle_label(label)
 }
 
 /// One object's tree.
@@ -86,10 +79,6 @@ pub struct TreePart<'a> {
     pub id: PartId,
     pub label: &'a str,
     pub primitive: &'a Primitive,
-}
-
-fn is_base_label(label: &str) -> bool {
-    crate::kinematics::label_tokens(label).any(|t| matches!(t.as_str(), "body" | "base" | "frame" | "top" | "carcass" | "cabinet"))
 }
 
 const ROOT_WEIGHT: f64 = 1e-6;
