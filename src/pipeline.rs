@@ -116,6 +116,17 @@ pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &d
 /// such as handles have a near-square cross-section whose roll the points barely determine; left
 /// as fitted, their faces miss the Align test (θa) against the part they are mounted on.
 fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits) {
+    // Base parts first: furniture stands upright.
+    parts.par_iter_mut().for_each(|p| {
+        if !is_base_label(&p.label) || p.primitive.kind != PrimitiveKind::Cuboid || edits.primitive_kind.contains_key(&p.id) {
+            return;
+        }
+        let Some(points) = scan.part(p.id).map(|s| s.points.as_slice()) else { return };
+        if let Some((prim, err)) = upright_refit(points, &p.primitive, p.fit_error) {
+            p.primitive = prim;
+            p.fit_error = err;
+        }
+    });
     let mut reference: BTreeMap<ObjectId, (bool, f32, PartId, Primitive)> = BTreeMap::new();
     for p in parts.iter() {
         let key = (is_base_label(&p.label), p.primitive.volume(), p.id, p.primitive);
@@ -135,6 +146,45 @@ fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits) {
             p.fit_error = err;
         }
     });
+}
+
+/// An upright prior for the parts furniture is built on (body, base, frame, top): when the fit is
+/// tilted by more than 3°, the part is re-fitted as a box with a vertical axis (minimum-area
+/// footprint rectangle, robust extents), kept when its fit error stays within 1.5× (or +2 mm).
+/// A fridge body seen only through the margins around its doors is otherwise free to tilt, and
+/// a tilted base misplaces every hinge and drawer axis derived from it.
+fn upright_refit(points: &[Vec3], fitted: &Primitive, err_before: f32) -> Option<(Primitive, f32)> {
+    let tilt = fitted.axes_world().iter().map(|a| a.dot(crate::math::UP).abs()).fold(0.0_f32, f32::max);
+    if tilt > 3.0_f32.to_radians().cos() || points.len() < 10 {
+        return None;
+    }
+    let step = (points.len() / 4000).max(1);
+    let sample: Vec<Vec3> = points.iter().step_by(step).copied().collect();
+    let hull = crate::polygon::convex_hull(sample.iter().map(|p| p.truncate()).collect());
+    let u = crate::polygon::min_area_rect_dir(&hull, 1e-3);
+    let (ux, uy) = (Vec3::new(u.x, u.y, 0.0), Vec3::new(-u.y, u.x, 0.0));
+    // Robust extents (0.5 % trimmed on each side) along (u, v, up).
+    let mut coords: [Vec<f32>; 3] = [Vec::new(), Vec::new(), Vec::new()];
+    for p in &sample {
+        coords[0].push(p.dot(ux));
+        coords[1].push(p.dot(uy));
+        coords[2].push(p.z);
+    }
+    let mut lo = [0.0_f32; 3];
+    let mut hi = [0.0_f32; 3];
+    for (k, c) in coords.iter_mut().enumerate() {
+        c.sort_by(f32::total_cmp);
+        let n = c.len();
+        lo[k] = c[n / 200];
+        hi[k] = c[n - 1 - n / 200];
+    }
+    let mid = Vec3::new(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2]));
+    let center = ux * mid.x + uy * mid.y + Vec3::Z * mid.z;
+    let size = Vec3::new(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    let rotation = crate::math::Quat::from_mat3(&glam::Mat3::from_cols(ux, uy, Vec3::Z));
+    let candidate = Primitive::new(PrimitiveKind::Cuboid, size, crate::math::Pose::from_parts(center, rotation));
+    let err_after = candidate.mean_surface_distance(points, 4000);
+    (err_after <= (err_before * 1.5).max(err_before + 0.002)).then_some((candidate, err_after))
 }
 
 /// Re-fits `fitted` with its axes snapped onto `reference`'s; `None` when the axes are not within

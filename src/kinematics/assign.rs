@@ -58,6 +58,27 @@ pub fn is_movable_label(label: &str) -> bool {
     joint_kind_for_label(label).is_movable() && !is_handle_label(label)
 }
 
+/// Typical attachments of furniture parts (child words → parent words): a handle is mounted on
+/// the door or drawer it moves, legs carry a top or a seat, a headboard and a mattress belong to
+/// the bed frame, a chair back to its seat, doors and drawers to the body.
+const TYPICAL_PARENTS: &[(&[&str], &[&str])] = &[
+    (&["handle", "handles", "pull", "grip", "bar"], &["door", "doors", "drawer", "drawers", "lid", "flap", "hatch", "tray"]),
+    (&["leg", "legs"], &["top", "seat", "base", "frame"]),
+    (&["headboard", "footboard", "mattress"], &["frame", "base"]),
+    (&["back", "backrest", "arm", "armrest"], &["seat"]),
+    (&["door", "doors", "drawer", "drawers", "lid", "flap", "shelf", "hatch"], &["body", "frame", "base", "cabinet", "carcass"]),
+];
+
+/// Whether `parent_label` names a typical parent of `child_label` ([`TYPICAL_PARENTS`]).
+#[must_use]
+pub fn is_typical_parent(child_label: &str, parent_label: &str) -> bool {
+    let child: Vec<String> = label_tokens(child_label).collect();
+    let parent: Vec<String> = label_tokens(parent_label).collect();
+    TYPICAL_PARENTS.iter().any(|(children, parents)| {
+        child.iter().any(|c| children.contains(&c.as_str())) && parent.iter().any(|p| parents.contains(&p.as_str()))
+    })
+}
+
 /// The joint type a label calls for; unknown labels are rigid.
 #[must_use]
 pub fn joint_kind_for_label(label: &str) -> JointKind {

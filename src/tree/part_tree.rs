@@ -7,9 +7,12 @@
 //! - `root_prior`: the most base-like part (labelled body, base, frame or top; then the largest)
 //!   gets a root edge of this weight, so a bed hangs off its frame rather than its headboard when
 //!   the contact ratios alone are nearly symmetric;
-//! - `handle_prior`: a handle's edges from a movable-labelled part (door, drawer, lid) are scaled
-//!   by this factor: a handle touches the body behind a 2 cm door as well once fitting noise is
-//!   added, but it is mounted on the part it moves.
+//! - `label_prior`: a contact edge from a typical parent of the child's label
+//!   ([`crate::kinematics::is_typical_parent`]: a handle's door or drawer, a headboard's frame, a
+//!   leg's top) is scaled by this factor. Contacts alone are ambiguous at the centimetre level of
+//!   fitting noise — a handle touches the body behind a 2 cm door too, a headboard touches both
+//!   the frame and the mattress end — but the part is mounted on its typical parent. The prior
+//!   only chooses among real contacts; it never creates an edge.
 //!
 //! A part with no contact at all is attached to its nearest part by a fallback edge far lighter
 //! than any contact, and reported.
@@ -20,7 +23,7 @@ use serde::{Deserialize, Serialize};
 
 use super::arborescence::{WeightedEdge, max_arborescence};
 use crate::contact::{ContactConfig, PairContact, contact};
-use crate::kinematics::{is_base_label, is_handle_label, is_movable_label};
+use crate::kinematics::{is_base_label, is_typical_parent};
 use crate::model::ContactEdge;
 use crate::primitive::Primitive;
 use crate::report::Warning;
@@ -31,13 +34,13 @@ pub struct TreeConfig {
     pub contact: ContactConfig,
     /// Weight of the root edge of the most base-like part.
     pub root_prior: f32,
-    /// Factor on a handle's edges from door/drawer/lid parts.
-    pub handle_prior: f32,
+    /// Factor on contact edges from a typical parent of the child's label.
+    pub label_prior: f32,
 }
 
 impl Default for TreeConfig {
     fn default() -> Self {
-        Self { contact: ContactConfig::default(), root_prior: 0.25, handle_prior: 1.5 }
+        Self { contact: ContactConfig::default(), root_prior: 0.25, label_prior: 1.5 }
     }
 }
 
@@ -147,7 +150,7 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
                 continue;
             }
             let weight = match contacts.get(&(p.id, c.id)) {
-                Some(pc) if is_handle_label(c.label) && is_movable_label(p.label) => f64::from(pc.weight * cfg.handle_prior),
+                Some(pc) if is_typical_parent(c.label, p.label) => f64::from(pc.weight * cfg.label_prior),
                 Some(pc) => f64::from(pc.weight),
                 None => FALLBACK_WEIGHT / (1.0 + f64::from(primitive_gap(p.primitive, c.primitive))),
             };
