@@ -40,7 +40,7 @@ pub struct TreeConfig {
 
 impl Default for TreeConfig {
     fn default() -> Self {
-        Self { contact: ContactConfig::default(), root_prior: 0.25, label_prior: 1.5 }
+        Self { contact: ContactConfig::default(), root_prior: 1.0, label_prior: 1.5 }
     }
 }
 
