@@ -21,12 +21,21 @@ struct Cli {
     /// Machine-readable JSON on stdout instead of the human summary (no progress bars).
     #[arg(long, global = true)]
     json: bool,
+    /// θa: minimum |cos| between contact plane normals.
+    #[arg(long, global = true, value_name = "COS")]
+    align_min: Option<f32>,
+    /// θd: maximum distance between contact planes, metres.
+    #[arg(long, global = true, value_name = "M")]
+    dist_max: Option<f32>,
+    /// θc: minimum contact ratio.
+    #[arg(long, global = true, value_name = "RATIO")]
+    contact_min: Option<f32>,
     /// Without a command: the demo on the built-in room (seed 0), written to `out/demo`.
     #[command(subcommand)]
     command: Option<Command>,
 }
 
-#[derive(Subcommand)]
+#[derive(Subcommand, Clone)]
 enum Command {
     /// Generate the built-in demo room, scan it virtually, reconstruct and evaluate it.
     Demo {
@@ -100,12 +109,32 @@ impl Progress for Bars {
     }
 }
 
+/// The pipeline configuration with the command line's thresholds applied.
+fn config(cli: &Cli) -> Result<PipelineConfig> {
+    let mut cfg = PipelineConfig::default();
+    let contact = &mut cfg.tree.contact;
+    if let Some(v) = cli.align_min {
+        anyhow::ensure!((0.0..=1.0).contains(&v), "--align-min must be a cosine in [0, 1], got {v}");
+        contact.align_min = v;
+    }
+    if let Some(v) = cli.dist_max {
+        anyhow::ensure!(v > 0.0 && v.is_finite(), "--dist-max must be a positive distance in metres, got {v}");
+        contact.dist_max_m = v;
+    }
+    if let Some(v) = cli.contact_min {
+        anyhow::ensure!((0.0..=1.0).contains(&v), "--contact-min must be a ratio in [0, 1], got {v}");
+        contact.contact_min = v;
+    }
+    Ok(cfg)
+}
+
 fn main() -> Result<()> {
     let cli = Cli::parse();
-    let command = cli.command.unwrap_or(Command::Demo { seed: 0, count: 1, clean: false, out: Some(PathBuf::from("out/demo")) });
+    let cfg = config(&cli)?;
+    let command = cli.command.clone().unwrap_or(Command::Demo { seed: 0, count: 1, clean: false, out: Some(PathBuf::from("out/demo")) });
     match command {
-        Command::Demo { seed, count, clean, out } => demo(seed, count, clean, out.as_deref(), cli.json),
-        Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, cli.json),
+        Command::Demo { seed, count, clean, out } => demo(seed, count, clean, out.as_deref(), &cfg, cli.json),
+        Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, &cfg, cli.json),
         Command::Eval { scene, truth, scan } => eval_cmd(&scene, &truth, scan.as_deref(), cli.json),
     }
 }
@@ -137,11 +166,11 @@ fn summary(scene: &SceneModel, seconds: f64) -> String {
     )
 }
 
-fn reconstruct_cmd(scan_path: &Path, out: &Path, json: bool) -> Result<()> {
+fn reconstruct_cmd(scan_path: &Path, out: &Path, cfg: &PipelineConfig, json: bool) -> Result<()> {
     let (scan, scan_warnings) = read_scan(scan_path)?;
     let bars = Bars::new(!json);
     let t = Instant::now();
-    let mut scene = reconstruct(&scan, &PipelineConfig::default(), &PinnedEdits::default(), &bars);
+    let mut scene = reconstruct(&scan, cfg, &PinnedEdits::default(), &bars);
     bars.finish();
     let secs = t.elapsed().as_secs_f64();
     scene.warnings.splice(0..0, scan_warnings);
@@ -195,7 +224,7 @@ fn eval_cmd(scene_path: &Path, truth_path: &Path, scan_path: Option<&Path>, json
     Ok(())
 }
 
-fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, json: bool) -> Result<()> {
+fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, cfg: &PipelineConfig, json: bool) -> Result<()> {
     let mut runs = Vec::new();
     for s in seed..seed + count.max(1) {
         let t = Instant::now();
@@ -203,7 +232,7 @@ fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, json: bool) -> R
         let scan_secs = t.elapsed().as_secs_f64();
         let bars = Bars::new(!json);
         let t = Instant::now();
-        let scene = reconstruct(&scan, &PipelineConfig::default(), &PinnedEdits::default(), &bars);
+        let scene = reconstruct(&scan, cfg, &PinnedEdits::default(), &bars);
         bars.finish();
         let secs = t.elapsed().as_secs_f64();
         let evaluated = evaluate_both(&scene, &truth, &scan, Some(s));

@@ -48,3 +48,25 @@ fn reconstructing_a_missing_or_bad_file_fails_with_its_name() {
     assert!(err.contains("bad.ply"), "{err}");
     assert!(!dir.path().join("o").exists(), "nothing written for a bad scan");
 }
+
+#[test]
+fn contact_thresholds_are_validated_and_change_the_result() {
+    let o = partscene(&["--dist-max=-1", "demo", "--json"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--dist-max"), "{}", String::from_utf8_lossy(&o.stderr));
+    let dir = tempfile::tempdir().expect("tempdir");
+    let candidate_edges = |name: &str, args: &[&str]| {
+        let out = dir.path().join(name);
+        let mut all = args.to_vec();
+        all.extend(["demo", "--out", out.to_str().expect("utf-8")]);
+        let o = partscene(&all);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = std::fs::read_to_string(out.join("scene.json")).expect("scene.json");
+        let v: serde_json::Value = serde_json::from_str(&text).expect("json");
+        v["contact_edges"].as_array().expect("edges").len()
+    };
+    // θd = 5 mm instead of 3 cm: contacts across fitting noise no longer pass the Dist test.
+    let strict = candidate_edges("strict", &["--dist-max", "0.005"]);
+    let default = candidate_edges("default", &[]);
+    assert!(strict < default, "strict θd {strict} candidate edges, default {default}");
+}
