@@ -115,8 +115,9 @@ pub fn build_scene(objects: &mut [SceneObject], floor_z: f32, cfg: &SceneConfig)
     let mut warnings = Vec::new();
     let mut graph = SceneGraph { floor_z, ..SceneGraph::default() };
     // Bottom-up order.
+    let bottoms: Vec<f32> = objects.iter().map(|o| footprint(o).0).collect();
     let mut order: Vec<usize> = (0..objects.len()).collect();
-    order.sort_by(|&a, &b| footprint(&objects[a]).0.total_cmp(&footprint(&objects[b]).0).then(objects[a].id.cmp(&objects[b].id)));
+    order.sort_by(|&a, &b| bottoms[a].total_cmp(&bottoms[b]).then(objects[a].id.cmp(&objects[b].id)));
     for &i in &order {
         make_upright(&mut objects[i], cfg);
         let (bottom, print) = footprint(&objects[i]);
