@@ -396,6 +396,46 @@ fn check_object(dir: &Path, object_id: &str, format: &str) -> Vec<String> {
     problems
 }
 
+/// Per link: the bounds of its visual meshes.
+fn visual_mesh_bounds(asset: &partscene::assets::ArticulatedAsset) -> Vec<(String, Option<(Vec3, Vec3)>)> {
+    asset
+        .links
+        .iter()
+        .map(|l| {
+            let b = l.geoms.iter().filter(|g| g.role == GeomRole::Visual && !g.is_primitive()).filter_map(AssetGeom::aabb);
+            (l.name.clone(), b.reduce(|a, b| (a.0.min(b.0), a.1.max(b.1))))
+        })
+        .collect()
+}
+
+/// The habitat URDFs reference GLB meshes, their `*_obj.urdf` twins OBJ conversions of them:
+/// both must give the same visual geometry.
+#[test]
+fn habitat_glb_meshes_match_their_obj_conversions() {
+    let root = Path::new(OBJECTS).join("habitat_replicacad");
+    if !root.is_dir() {
+        eprintln!("!!!!! SKIPPED: {} is absent; GLB import was not checked !!!!!", root.display());
+        return;
+    }
+    let mut compared = 0;
+    for object in ["door1", "door2", "fridge", "kitchen_counter"] {
+        let glb = load_asset(&root.join(object).join(format!("{object}.urdf"))).unwrap();
+        let obj = load_asset(&root.join(object).join(format!("{object}_obj.urdf"))).unwrap();
+        assert!(glb.warnings.iter().all(|w| !w.message.contains("mesh")), "{object}: {:?}", glb.warnings);
+        for ((name, a), (_, b)) in visual_mesh_bounds(&glb).into_iter().zip(visual_mesh_bounds(&obj)) {
+            match (a, b) {
+                (Some(a), Some(b)) => {
+                    assert!(close(a.0, b.0, 0.01) && close(a.1, b.1, 0.01), "{object}/{name}: GLB {a:?} vs OBJ {b:?}");
+                    compared += 1;
+                }
+                (None, None) => {}
+                other => panic!("{object}/{name}: visual meshes differ: {other:?}"),
+            }
+        }
+    }
+    assert!(compared >= 10, "only {compared} links compared");
+}
+
 #[test]
 fn shared_objects_match_their_annotations() {
     let root = Path::new(OBJECTS);

@@ -1,6 +1,8 @@
 //! Triangle meshes referenced by URDF and MJCF files: Wavefront OBJ (tobj, polygons
 //! triangulated, all objects of a file merged), STL (`stl_io`, ASCII or binary) and `MuJoCo`'s legacy
-//! binary `.msh`. GLB/glTF is not read: the caller reports it and keeps the link.
+//! binary `.msh`, and glTF (`.glb`, or `.gltf` with buffers in files beside it) via `gltf`: the
+//! triangles of every mesh node of the default scene, node transforms applied, in the file's own
+//! axes (no Y-up → Z-up turn: URDFs that reference GLBs are written in the GLB's frame).
 
 use std::io::Cursor;
 use std::path::Path;
@@ -23,6 +25,8 @@ pub enum MeshFormat {
     /// `MuJoCo`'s legacy binary format: four `i32` counts (vertices, normals, texture coordinates,
     /// faces), then `f32` positions, normals, texture coordinates and `i32` face indices.
     Msh,
+    /// glTF 2.0, binary (`.glb`) or JSON (`.gltf`).
+    Gltf,
 }
 
 impl MeshFormat {
@@ -34,6 +38,7 @@ impl MeshFormat {
             "obj" => Some(Self::Obj),
             "stl" => Some(Self::Stl),
             "msh" => Some(Self::Msh),
+            "glb" | "gltf" => Some(Self::Gltf),
             _ => None,
         }
     }
@@ -60,6 +65,7 @@ pub fn load_mesh(path: &Path) -> Result<TriMesh, AssetError> {
         MeshFormat::Obj => parse_obj(&bytes),
         MeshFormat::Stl => parse_stl(&bytes),
         MeshFormat::Msh => parse_msh(&bytes),
+        MeshFormat::Gltf => parse_gltf(&bytes, path.parent().unwrap_or(Path::new("."))),
     }
     .map_err(|message| mesh_error(path, message))?;
     validate(&mesh).map_err(|message| mesh_error(path, message))?;
@@ -136,6 +142,56 @@ fn parse_msh(bytes: &[u8]) -> Result<TriMesh, String> {
         triangles.push(tri);
     }
     Ok(TriMesh { vertices, triangles })
+}
+
+/// glTF / GLB: triangle primitives of the default scene's node tree (all scenes' roots when no
+/// default is set), with node transforms. Buffers: the GLB `BIN` chunk or files next to the
+/// glTF; embedded `data:` URIs are not read.
+fn parse_gltf(bytes: &[u8], dir: &Path) -> Result<TriMesh, String> {
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| format!("glTF: {e}"))?;
+    let mut buffers: Vec<Option<Vec<u8>>> = Vec::new();
+    for buffer in gltf.document.buffers() {
+        buffers.push(match buffer.source() {
+            gltf::buffer::Source::Bin => gltf.blob.clone(),
+            gltf::buffer::Source::Uri(uri) if !uri.starts_with("data:") => {
+                Some(std::fs::read(dir.join(uri)).map_err(|e| format!("glTF buffer {uri}: {e}"))?)
+            }
+            gltf::buffer::Source::Uri(_) => None,
+        });
+    }
+    let roots: Vec<gltf::Node> = match gltf.document.default_scene() {
+        Some(scene) => scene.nodes().collect(),
+        None => gltf.document.scenes().flat_map(|s| s.nodes().collect::<Vec<_>>()).collect(),
+    };
+    let mut mesh = TriMesh::default();
+    let mut stack: Vec<(gltf::Node, glam::Mat4)> = roots.into_iter().rev().map(|n| (n, glam::Mat4::IDENTITY)).collect();
+    let mut visited = 0usize;
+    while let Some((node, parent_from_root)) = stack.pop() {
+        visited += 1;
+        if visited > 100_000 {
+            return Err("glTF: node hierarchy too deep or cyclic".into());
+        }
+        let root_from_node = parent_from_root * glam::Mat4::from_cols_array_2d(&node.transform().matrix());
+        if let Some(m) = node.mesh() {
+            for primitive in m.primitives().filter(|p| p.mode() == gltf::mesh::Mode::Triangles) {
+                let reader = primitive.reader(|b| buffers.get(b.index()).and_then(|d| d.as_deref()));
+                let Some(positions) = reader.read_positions() else { continue };
+                let base = mesh.vertices.len() as u32;
+                mesh.vertices.extend(positions.map(|p| root_from_node.transform_point3(Vec3::from(p))));
+                let count = mesh.vertices.len() as u32 - base;
+                let indices: Vec<u32> = match reader.read_indices() {
+                    Some(ix) => ix.into_u32().collect(),
+                    None => (0..count).collect(),
+                };
+                if indices.iter().any(|&i| i >= count) {
+                    return Err(format!("glTF: mesh {} indexes past its {count} vertices", m.index()));
+                }
+                mesh.triangles.extend(indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+            }
+        }
+        stack.extend(node.children().map(|c| (c, root_from_node)));
+    }
+    Ok(mesh)
 }
 
 #[cfg(test)]

@@ -9,7 +9,8 @@
 //! Mesh file names are resolved relative to the URDF's folder; `package://pkg/` and `file://`
 //! prefixes are stripped (a `package://` path is also tried one and two folders up, with and
 //! without the package name). A mesh that cannot be found or read is a warning naming it; the
-//! link is kept without that geom. GLB/glTF meshes are reported the same way.
+//! link is kept without that geom. Mesh formats: OBJ, STL, `MuJoCo` `.msh`, GLB/glTF (see
+//! [`super::mesh`]).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -199,7 +200,7 @@ fn geometry_to_geom(
             let path = resolve_mesh_path(base_dir, filename)
                 .ok_or_else(|| format!("mesh {filename:?} not found (looked in {})", base_dir.display()))?;
             if MeshFormat::from_path(&path).is_none() {
-                return Err(format!("mesh {} has an unsupported format (OBJ, STL, MSH are read); geom skipped", path.display()));
+                return Err(format!("mesh {} has an unsupported format (OBJ, STL, MSH, GLB/glTF are read); geom skipped", path.display()));
             }
             let mesh = meshes.get(&path)?;
             let scale = scale.as_ref().map_or(Vec3::ONE, vec3);
