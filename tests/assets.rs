@@ -278,9 +278,14 @@ struct TruthJoint {
 
 #[derive(serde::Deserialize)]
 struct TruthGeom {
+    body: String,
     #[serde(rename = "type")]
     kind: String,
+    /// MuJoCo sizes: half extents (box), radius and half length (capsule, cylinder).
+    size: Vec<f32>,
     pos_world: [f32; 3],
+    /// Row-major rotation matrix (MuJoCo `xmat`).
+    rot_world: [f32; 9],
 }
 
 /// The file to import from an object folder: `*_obj.urdf` (OBJ conversions) over `*.urdf`,
@@ -378,19 +383,40 @@ fn check_object(dir: &Path, object_id: &str, format: &str) -> Vec<String> {
             }
         }
     }
-    // MJCF annotations list the box/capsule/cylinder geoms in world frame: each must be imported.
+    // MJCF annotations list the box/capsule/cylinder geoms in world frame: each must be imported
+    // on the same body with the same placement and full size (ours) = 2 × half size (MuJoCo's).
     let prims = asset.primitives();
     for g in &truth.primitive_geoms {
-        let kind = match g.kind.as_str() {
-            "box" => PrimitiveKind::Cuboid,
-            "capsule" => PrimitiveKind::Capsule,
-            "cylinder" => PrimitiveKind::Cylinder,
-            "sphere" => PrimitiveKind::Sphere,
-            _ => continue,
+        let (kind, want_size) = match (g.kind.as_str(), g.size.as_slice()) {
+            ("box", [x, y, z, ..]) => (PrimitiveKind::Cuboid, Vec3::new(2.0 * x, 2.0 * y, 2.0 * z)),
+            ("cylinder", [r, h, ..]) => (PrimitiveKind::Cylinder, Vec3::new(2.0 * r, 2.0 * r, 2.0 * h)),
+            ("capsule", [r, h, ..]) => (PrimitiveKind::Capsule, Vec3::new(2.0 * r, 2.0 * r, 2.0 * h + 2.0 * r)),
+            _ => {
+                problems.push(format!("annotation geom {} with size {:?} not understood by the test", g.kind, g.size));
+                continue;
+            }
         };
         let at = Vec3::from(g.pos_world);
-        if !prims.iter().any(|(_, _, p)| p.kind == kind && (p.center() - at).length() < 1e-3) {
-            problems.push(format!("primitive {} at {at:?} not imported", g.kind));
+        let r = &g.rot_world;
+        let truth_axes = [Vec3::new(r[0], r[3], r[6]), Vec3::new(r[1], r[4], r[7]), Vec3::new(r[2], r[5], r[8])];
+        let same = |p: &partscene::primitive::Primitive| {
+            let axes = p.axes_world();
+            let axes_ok = match kind {
+                // Box: the same three signed-free axes with the same extents along them.
+                PrimitiveKind::Cuboid => (0..3).all(|k| axes[k].dot(truth_axes[k]).abs() > 0.9998),
+                // Round shapes: only the z axis is defined.
+                _ => axes[2].dot(truth_axes[2]).abs() > 0.9998,
+            };
+            p.kind == kind && close(p.center(), at, 1e-4) && close(p.size, want_size, 1e-4) && axes_ok
+        };
+        if !prims.iter().any(|(link, _, p)| *link == g.body && same(p)) {
+            problems.push(format!("primitive {} {:?} at {at:?} on {} not imported", g.kind, g.size, g.body));
+        }
+    }
+    if !truth.primitive_geoms.is_empty() {
+        let ours = prims.iter().filter(|(_, _, p)| p.kind != PrimitiveKind::Sphere).count();
+        if ours != truth.primitive_geoms.len() {
+            problems.push(format!("{ours} box/capsule/cylinder geoms imported, {} annotated", truth.primitive_geoms.len()));
         }
     }
     problems
