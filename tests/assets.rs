@@ -281,10 +281,10 @@ struct TruthGeom {
     body: String,
     #[serde(rename = "type")]
     kind: String,
-    /// MuJoCo sizes: half extents (box), radius and half length (capsule, cylinder).
+    /// `MuJoCo` sizes: half extents (box), radius and half length (capsule, cylinder).
     size: Vec<f32>,
     pos_world: [f32; 3],
-    /// Row-major rotation matrix (MuJoCo `xmat`).
+    /// Row-major rotation matrix (`MuJoCo` `xmat`).
     rot_world: [f32; 9],
 }
 
