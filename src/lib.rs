@@ -4,6 +4,7 @@
 //! Data flows one way: scan → parts → primitives → contact graph → tree → joints → refined
 //! scene → exports. See `ARCHITECTURE.md` for the module map and invariants.
 
+pub mod assets;
 pub mod contact;
 pub mod eval;
 pub mod export;
