@@ -65,7 +65,10 @@ pub fn load_mesh(path: &Path) -> Result<TriMesh, AssetError> {
         MeshFormat::Obj => parse_obj(&bytes),
         MeshFormat::Stl => parse_stl(&bytes),
         MeshFormat::Msh => parse_msh(&bytes),
-        MeshFormat::Gltf => parse_gltf(&bytes, path.parent().unwrap_or(Path::new("."))),
+        // The gltf crate can panic on some malformed documents instead of returning an error;
+        // contain that here so a bad mesh file is an error naming it, never a crash.
+        MeshFormat::Gltf => std::panic::catch_unwind(|| parse_gltf(&bytes, path.parent().unwrap_or(Path::new("."))))
+            .unwrap_or_else(|_| Err("glTF: malformed document (the glTF reader gave up)".to_owned())),
     }
     .map_err(|message| mesh_error(path, message))?;
     validate(&mesh).map_err(|message| mesh_error(path, message))?;
@@ -243,5 +246,28 @@ mod tests {
         assert!(err.contains("broken.msh"), "{err}");
         let missing = load_mesh(&dir.path().join("nope.stl")).unwrap_err().to_string();
         assert!(missing.contains("nope.stl"), "{missing}");
+    }
+
+    #[test]
+    fn corrupt_glb_files_are_errors_not_crashes() {
+        let dir = tempfile::tempdir().unwrap();
+        // A GLB header, then a JSON chunk whose document points at accessors that do not exist,
+        // then cut short; and plain garbage after a valid magic.
+        let json = br#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}]}  "#;
+        let mut glb = Vec::new();
+        glb.extend_from_slice(b"glTF");
+        glb.extend_from_slice(&2u32.to_le_bytes());
+        glb.extend_from_slice(&((12 + 8 + json.len()) as u32).to_le_bytes());
+        glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        glb.extend_from_slice(b"JSON");
+        glb.extend_from_slice(json);
+        for (name, bytes) in
+            [("dangling.glb", glb.clone()), ("cut.glb", glb[..30].to_vec()), ("junk.glb", b"glTF\x02\0\0\0garbage".to_vec())]
+        {
+            let path = dir.path().join(name);
+            std::fs::write(&path, bytes).unwrap();
+            let err = load_mesh(&path).expect_err("corrupt glb").to_string();
+            assert!(err.contains(name), "{err}");
+        }
     }
 }
