@@ -23,7 +23,7 @@ use crate::refine::{RefineConfig, RefineStats, refine_object};
 use crate::report::Warning;
 use crate::scan::{ObjectId, PartId, Scan};
 use crate::scene::{SceneConfig, SceneObject, build_scene, estimate_floor};
-use crate::tree::{PartTree, TreeConfig, TreePart, build_part_tree};
+use crate::tree::{PartTree, TreeConfig, TreePart, build_part_tree, root_preference};
 
 /// Every threshold of the method in one place.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -127,16 +127,16 @@ fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits) {
             p.fit_error = err;
         }
     });
-    let mut reference: BTreeMap<ObjectId, (bool, f32, PartId, Primitive)> = BTreeMap::new();
+    // The reference of each object: its most base-like part (the tree's preferred root).
+    let mut reference: BTreeMap<ObjectId, ((bool, f32), PartId, Primitive)> = BTreeMap::new();
     for p in parts.iter() {
-        let key = (is_base_label(&p.label), p.primitive.volume(), p.id, p.primitive);
-        let better = reference.get(&p.object).is_none_or(|r| (key.0, key.1) > (r.0, r.1));
-        if better {
-            reference.insert(p.object, key);
+        let pref = root_preference(&p.label, &p.primitive);
+        if reference.get(&p.object).is_none_or(|r| pref > r.0) {
+            reference.insert(p.object, (pref, p.id, p.primitive));
         }
     }
     parts.par_iter_mut().for_each(|p| {
-        let Some(&(_, _, ref_id, ref_prim)) = reference.get(&p.object) else { return };
+        let Some(&(_, ref_id, ref_prim)) = reference.get(&p.object) else { return };
         if ref_id == p.id || p.primitive.kind == PrimitiveKind::Sphere || edits.primitive_kind.contains_key(&p.id) {
             return;
         }

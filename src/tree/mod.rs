@@ -5,4 +5,4 @@ mod arborescence;
 mod part_tree;
 
 pub use arborescence::{WeightedEdge, max_arborescence};
-pub use part_tree::{PartTree, TreeConfig, TreePart, build_part_tree};
+pub use part_tree::{PartTree, TreeConfig, TreePart, build_part_tree, root_preference};

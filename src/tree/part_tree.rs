@@ -84,6 +84,14 @@ pub struct TreePart<'a> {
     pub primitive: &'a Primitive,
 }
 
+/// How base-like a part is (larger is more): parts labelled as a base (body, base, frame, top)
+/// first, then larger parts. The tree's root prior and the pipeline's co-alignment reference both
+/// use it.
+#[must_use]
+pub fn root_preference(label: &str, primitive: &Primitive) -> (bool, f32) {
+    (is_base_label(label), primitive.volume())
+}
+
 const ROOT_WEIGHT: f64 = 1e-6;
 const FALLBACK_WEIGHT: f64 = 1e-4;
 const FORCED_WEIGHT: f64 = 1e3;
@@ -114,8 +122,8 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
     // Root preference: base labels first, then volume (rank keeps weights tiny and ordered).
     let mut by_pref: Vec<usize> = (0..n).collect();
     by_pref.sort_by(|&a, &b| {
-        let ka = (is_base_label(parts[a].label), parts[a].primitive.volume());
-        let kb = (is_base_label(parts[b].label), parts[b].primitive.volume());
+        let ka = root_preference(parts[a].label, parts[a].primitive);
+        let kb = root_preference(parts[b].label, parts[b].primitive);
         ka.partial_cmp(&kb).unwrap_or(std::cmp::Ordering::Equal).then(parts[b].id.cmp(&parts[a].id))
     });
     let mut edges = Vec::new();
