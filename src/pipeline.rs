@@ -388,7 +388,10 @@ fn make_joint(
     let (Some(pp), Some(cp)) = (prims.get(&parent), prims.get(&child)) else {
         return Joint { parent, child, kind: JointKind::Fixed, axis_world: Vec3::X, origin_world: Vec3::ZERO, lower: 0.0, upper: 0.0 };
     };
-    let mut joint = estimate_joint(parent, pp, child, cp, label, kind, handle, &cfg.kinematics);
+    // The parent face the child is mounted on (same face index on the refined primitive).
+    let mount_normal =
+        tree.contacts.get(&(parent, child)).and_then(|c| crate::contact::surface_planes(pp).get(c.parent_face).map(|f| f.normal));
+    let mut joint = estimate_joint(parent, pp, child, cp, label, kind, handle, mount_normal, &cfg.kinematics);
     if let Some(axis) = edits.axis.get(&child) {
         joint.axis_world = axis.normalize_or(joint.axis_world);
     }

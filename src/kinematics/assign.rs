@@ -133,7 +133,11 @@ pub fn outward_direction(parent: &Primitive, child: &Primitive, handle: Option<V
 }
 
 /// Estimates the joint between `parent` and `child` of the given kind. `handle` is the centre of a
-/// handle or knob mounted on the child, if it has one.
+/// handle or knob mounted on the child, if it has one. `mount_normal` is the outward normal of
+/// the parent face the child is mounted on, from the contact test (paper eq. 1), when there is
+/// one: it is the direction a drawer slides, a door opens towards, a knob turns about. A vertical
+/// mount normal for a door or a drawer (found resting on a shelf rather than hung in the front)
+/// is not trusted; then, and without a contact, [`outward_direction`] decides from the geometry.
 #[must_use]
 pub fn estimate_joint(
     parent_id: PartId,
@@ -143,9 +147,14 @@ pub fn estimate_joint(
     child_label: &str,
     kind: JointKind,
     handle: Option<Vec3>,
+    mount_normal: Option<Vec3>,
     cfg: &KinematicsConfig,
 ) -> Joint {
-    let out = outward_direction(parent, child, handle);
+    let side_opening = label_tokens(child_label).any(|t| matches!(t.as_str(), "door" | "doors" | "drawer" | "drawers" | "tray"));
+    let out = match mount_normal {
+        Some(n) if !(side_opening && n.dot(UP).abs() > 0.7) => n.normalize_or(Vec3::Z),
+        _ => outward_direction(parent, child, handle),
+    };
     let mut joint =
         Joint { parent: parent_id, child: child_id, kind, axis_world: out, origin_world: child.center(), lower: 0.0, upper: 0.0 };
     match kind {
@@ -253,7 +262,7 @@ mod tests {
     #[test]
     fn drawer_slides_out_of_the_front_about_its_depth() {
         let drawer = Primitive::cuboid_at(Vec3::new(0.0, 0.26, 0.8), Vec3::new(0.6, 0.02, 0.2));
-        let j = estimate_joint(1, &cabinet_body(), 2, &drawer, "drawer", JointKind::Prismatic, None, &KinematicsConfig::default());
+        let j = estimate_joint(1, &cabinet_body(), 2, &drawer, "drawer", JointKind::Prismatic, None, None, &KinematicsConfig::default());
         assert!(j.axis_world.dot(Vec3::Y) > 0.999, "{j:?}");
         assert!((j.upper - 0.85 * 0.5).abs() < 1e-5);
     }
@@ -262,7 +271,7 @@ mod tests {
     fn door_hinges_on_the_edge_away_from_its_handle_and_opens_outward() {
         let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
         let handle = Vec3::new(0.36, 0.29, 0.5); // near the door's +x edge
-        let j = estimate_joint(1, &cabinet_body(), 2, &door, "door", JointKind::Revolute, Some(handle), &KinematicsConfig::default());
+        let j = estimate_joint(1, &cabinet_body(), 2, &door, "door", JointKind::Revolute, Some(handle), None, &KinematicsConfig::default());
         assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "vertical hinge: {j:?}");
         assert!((j.origin_world.x - 0.0).abs() < 1e-5, "hinge on the -x edge: {j:?}");
         assert!((j.origin_world.y - 0.25).abs() < 1e-5, "at the back face: {j:?}");
@@ -276,8 +285,26 @@ mod tests {
     fn oven_door_with_handle_on_top_hinges_at_the_bottom() {
         let door = Primitive::cuboid_at(Vec3::new(0.0, 0.26, 0.4), Vec3::new(0.7, 0.02, 0.5));
         let handle = Vec3::new(0.0, 0.29, 0.6);
-        let j = estimate_joint(1, &cabinet_body(), 2, &door, "door", JointKind::Revolute, Some(handle), &KinematicsConfig::default());
+        let j = estimate_joint(1, &cabinet_body(), 2, &door, "door", JointKind::Revolute, Some(handle), None, &KinematicsConfig::default());
         assert!(j.axis_world.dot(Vec3::X).abs() > 0.999, "{j:?}");
         assert!((j.origin_world.z - 0.15).abs() < 1e-5, "{j:?}");
+    }
+
+    #[test]
+    fn a_knob_near_the_side_edge_turns_about_the_face_it_is_mounted_on() {
+        // A knob on the front face at the body's +x edge, fitted 2 cm past it (a few points): by
+        // position alone it lies farther out along +x than along the front normal (+y); the
+        // contact face decides.
+        let body = cabinet_body();
+        let knob = Primitive::cuboid_at(Vec3::new(0.42, 0.2575, 0.9), Vec3::new(0.04, 0.015, 0.04));
+        let cfg = KinematicsConfig::default();
+        let guessed = estimate_joint(1, &body, 2, &knob, "knob", JointKind::Revolute, None, None, &cfg);
+        let mounted = estimate_joint(1, &body, 2, &knob, "knob", JointKind::Revolute, None, Some(Vec3::Y), &cfg);
+        assert!(guessed.axis_world.dot(Vec3::X) > 0.99, "position alone picks the side: {guessed:?}");
+        assert!(mounted.axis_world.dot(Vec3::Y) > 0.999, "{mounted:?}");
+        // A vertical mount normal does not turn a door into a lid.
+        let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
+        let j = estimate_joint(1, &body, 2, &door, "door", JointKind::Revolute, Some(Vec3::new(0.36, 0.29, 0.5)), Some(Vec3::Z), &cfg);
+        assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "{j:?}");
     }
 }
