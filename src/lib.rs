@@ -5,6 +5,7 @@
 //! scene → exports. See `ARCHITECTURE.md` for the module map and invariants.
 
 pub mod assets;
+pub mod bench;
 pub mod contact;
 pub mod eval;
 pub mod export;

@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use partscene::bench;
 use partscene::eval::{self, Metrics};
 use partscene::export::{UrdfConfig, read_scene_json, scene_json, scene_urdf};
 use partscene::io::atomic_write;
@@ -70,6 +71,50 @@ enum Command {
         /// The scan, to also run and score the object-level baseline.
         #[arg(long)]
         scan: Option<PathBuf>,
+    },
+    /// Scan an articulated asset (URDF / MJCF) virtually: writes NAME.ply, NAME.json (labels) and
+    /// NAME.gt.json (ground truth for `eval`).
+    ScanAsset {
+        asset: PathBuf,
+        /// The scan to write (PLY); labels and truth go beside it.
+        #[arg(long)]
+        out: PathBuf,
+        /// The clean complete setting (all around, no noise: the paper's annotation input).
+        #[arg(long)]
+        clean: bool,
+        /// Camera viewpoints (default: 8 partial, 24 clean).
+        #[arg(long)]
+        viewpoints: Option<usize>,
+        /// Depth noise σ at 1 m range, metres (default 0.0015 partial, 0 clean).
+        #[arg(long, value_name = "M")]
+        noise: Option<f32>,
+        /// Fraction of points near a part border that take the neighbour's label (segmentation bleed).
+        #[arg(long, value_name = "F")]
+        strays: Option<f32>,
+        /// Fraction of points pushed off the surface as outliers.
+        #[arg(long, value_name = "F")]
+        outliers: Option<f32>,
+        /// Image size in pixels, `WIDTHxHEIGHT`.
+        #[arg(long, value_name = "WxH")]
+        image: Option<String>,
+        /// Which asset axis is up (default: +y for habitat assets listed in a MANIFEST.tsv, else z).
+        #[arg(long, value_parser = ["y", "z"])]
+        up: Option<String>,
+        /// Object category (default: MANIFEST.tsv `category`, else from the file name).
+        #[arg(long)]
+        category: Option<String>,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+    /// Benchmark every asset under DIR: scan (partial and clean), reconstruct, score against the
+    /// asset's own annotation and the object-level baseline; print the tables.
+    Bench {
+        dir: PathBuf,
+        /// Also write the tables as markdown here.
+        #[arg(long)]
+        markdown: Option<PathBuf>,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
     },
 }
 
@@ -136,6 +181,34 @@ fn main() -> Result<()> {
         Command::Demo { seed, count, clean, out } => demo(seed, count, clean, out.as_deref(), &cfg, cli.json),
         Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, &cfg, cli.json),
         Command::Eval { scene, truth, scan } => eval_cmd(&scene, &truth, scan.as_deref(), cli.json),
+        Command::ScanAsset { asset, out, clean, viewpoints, noise, strays, outliers, image, up, category, seed } => {
+            let mut scanner = bench::run::asset_scanner_config(clean);
+            if let Some(v) = viewpoints {
+                anyhow::ensure!(v > 0, "--viewpoints must be at least 1");
+                scanner.viewpoints = v;
+            }
+            if let Some(v) = noise {
+                anyhow::ensure!(v >= 0.0 && v.is_finite(), "--noise must be a non-negative distance in metres, got {v}");
+                scanner.depth_noise_m = v;
+            }
+            if let Some(v) = strays {
+                anyhow::ensure!((0.0..=1.0).contains(&v), "--strays must be a fraction in [0, 1], got {v}");
+                scanner.stray_fraction = v;
+            }
+            if let Some(v) = outliers {
+                anyhow::ensure!((0.0..=1.0).contains(&v), "--outliers must be a fraction in [0, 1], got {v}");
+                scanner.outlier_fraction = v;
+            }
+            if let Some(size) = image {
+                let parsed = size.split_once(['x', 'X']).and_then(|(w, h)| Some((w.parse::<usize>().ok()?, h.parse::<usize>().ok()?)));
+                let Some((w, h)) = parsed.filter(|(w, h)| *w > 0 && *h > 0) else {
+                    anyhow::bail!("--image must be WIDTHxHEIGHT (e.g. 320x240), got {size:?}");
+                };
+                (scanner.image_width, scanner.image_height) = (w, h);
+            }
+            scan_asset_cmd(&asset, &out, &scanner, up.as_deref(), category, seed, cli.json)
+        }
+        Command::Bench { dir, markdown, seed } => bench_cmd(&dir, markdown.as_deref(), seed, &cfg, cli.json),
     }
 }
 
@@ -260,6 +333,107 @@ fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, cfg: &PipelineCo
         println!("{}", serde_json::to_string_pretty(&serde_json::json!({"runs": runs, "total": total}))?);
     } else if runs.len() > 1 {
         println!("over {} seeds:\n{total}", runs.len());
+    }
+    Ok(())
+}
+
+fn scan_asset_cmd(
+    asset: &Path,
+    out: &Path,
+    scanner: &partscene::synth::ScannerConfig,
+    up: Option<&str>,
+    category: Option<String>,
+    seed: u64,
+    json: bool,
+) -> Result<()> {
+    let mut entry = bench::manifest_entry_for(asset).unwrap_or_else(|| bench::AssetEntry {
+        name: asset.display().to_string(),
+        path: asset.to_path_buf(),
+        category: None,
+        up: bench::UpAxis::Z,
+    });
+    match up {
+        Some("y") => entry.up = bench::UpAxis::Y,
+        Some(_) => entry.up = bench::UpAxis::Z,
+        None => {}
+    }
+    if category.is_some() {
+        entry.category = category;
+    }
+    let t = Instant::now();
+    let (truth, scan, warnings) = bench::scan_asset(&entry, scanner, seed)?;
+    let secs = t.elapsed().as_secs_f64();
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    write_scan(&scan, out)?;
+    let gt_path = out.with_extension("gt.json");
+    atomic_write(&gt_path, serde_json::to_string_pretty(&truth.truth)?.as_bytes())?;
+    let object = &truth.truth.objects[0];
+    let movable = object.joints.iter().filter(|j| j.kind.is_movable()).count();
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({"scan": out, "truth": gt_path, "points": scan.point_count(), "parts": scan.parts.len(),
+                "truth_parts": object.parts.len(), "movable_joints": movable, "warnings": warnings, "seconds": secs})
+        );
+    } else {
+        for w in &warnings {
+            eprintln!("warning: {w}");
+        }
+        let labels: Vec<String> = object.parts.iter().map(|p| format!("{}:{}", p.id, p.label)).collect();
+        println!(
+            "{}: {} ({}), {} parts [{}], {movable} movable joints; {} points on {} parts in {secs:.2} s",
+            asset.display(),
+            truth.truth.objects[0].category,
+            if entry.up == bench::UpAxis::Y { "+y up" } else { "+z up" },
+            object.parts.len(),
+            labels.join(" "),
+            scan.point_count(),
+            scan.parts.len()
+        );
+        println!("wrote {}, {} and {}", out.display(), out.with_extension("json").display(), gt_path.display());
+    }
+    Ok(())
+}
+
+fn bench_cmd(dir: &Path, markdown: Option<&Path>, seed: u64, pipeline: &PipelineConfig, json: bool) -> Result<()> {
+    let cfg = bench::BenchConfig { pipeline: pipeline.clone(), seed, ..bench::BenchConfig::default() };
+    let bar = (!json && std::io::IsTerminal::is_terminal(&std::io::stderr())).then(|| {
+        let b = ProgressBar::new(0);
+        b.set_style(
+            ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} assets ({elapsed})")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        b
+    });
+    let progress = |done: usize, total: usize, name: &str| {
+        if let Some(b) = &bar {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+            b.set_message(name.to_owned());
+        }
+    };
+    let report = bench::bench_dir(dir, &cfg, &progress)?;
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    if let Some(path) = markdown {
+        atomic_write(path, report.markdown().as_bytes())?;
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        for o in &report.objects {
+            for w in &o.warnings {
+                eprintln!("warning: {}: {w}", o.name);
+            }
+        }
+        println!("{report}");
+        if let Some(path) = markdown {
+            println!("wrote {}", path.display());
+        }
     }
     Ok(())
 }

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::kinematics::Joint;
+use crate::math::Vec3;
 use crate::primitive::Primitive;
 use crate::scan::{ObjectId, PartId};
 
@@ -37,4 +38,51 @@ pub struct TruthPart {
     pub label: String,
     /// Geometry as one or more primitives (a part may be modelled by several).
     pub shapes: Vec<Primitive>,
+    /// Geometry as triangle meshes in the world frame (imported assets), beside `shapes`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub meshes: Vec<TruthMesh>,
+}
+
+/// A triangle mesh in the world frame (metres).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TruthMesh {
+    pub vertices: Vec<Vec3>,
+    /// Vertex indices, counter-clockwise seen from outside where the source says so.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TruthMesh {
+    /// World-frame bounds of the vertices that triangles use; `None` without a triangle.
+    #[must_use]
+    pub fn aabb(&self) -> Option<(Vec3, Vec3)> {
+        let mut out: Option<(Vec3, Vec3)> = None;
+        for &i in self.triangles.iter().flatten() {
+            let v = *self.vertices.get(i as usize)?;
+            out = Some(out.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));
+        }
+        out
+    }
+
+    /// The triangles as vertex triples; triangles with an index out of range are skipped.
+    pub fn triangle_vertices(&self) -> impl Iterator<Item = [Vec3; 3]> + '_ {
+        self.triangles.iter().filter_map(|t| {
+            Some([*self.vertices.get(t[0] as usize)?, *self.vertices.get(t[1] as usize)?, *self.vertices.get(t[2] as usize)?])
+        })
+    }
+}
+
+impl TruthPart {
+    /// World-frame bounds of every primitive and mesh of the part; `None` without geometry.
+    #[must_use]
+    pub fn aabb(&self) -> Option<(Vec3, Vec3)> {
+        self.shapes.iter().map(Primitive::aabb).chain(self.meshes.iter().filter_map(TruthMesh::aabb)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+    }
+}
+
+impl TruthObject {
+    /// World-frame bounds of every part; `None` without geometry.
+    #[must_use]
+    pub fn aabb(&self) -> Option<(Vec3, Vec3)> {
+        self.parts.iter().filter_map(TruthPart::aabb).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+    }
 }

@@ -8,10 +8,11 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::mesh::{self, WorldLattice};
 use crate::math::Vec3;
 use crate::primitive::Primitive;
 use crate::scan::ObjectId;
-use crate::truth::{GroundTruth, TruthObject};
+use crate::truth::{GroundTruth, TruthMesh, TruthObject};
 
 /// Surface samples per object (split over its primitives by area) for the Chamfer distance.
 /// Point-to-sample distances put a floor under the Chamfer of two different samplings of the same
@@ -72,20 +73,74 @@ pub fn evaluate_geometry(objects: &[(ObjectId, Vec<Primitive>)], truth: &GroundT
         .map(|t| {
             let predicted: Vec<Primitive> =
                 objects.iter().filter(|(id, _)| *id == t.id).flat_map(|(_, prims)| prims.iter().copied()).collect();
-            let (chamfer, iou) = object_geometry(&predicted, &truth_shapes(t));
+            let (chamfer, iou) = object_geometry(&predicted, t);
             GeometryScore { object: t.id, category: t.category.clone(), chamfer, iou }
         })
         .collect()
 }
 
-/// All primitives of a truth object (every shape of every part).
-pub(crate) fn truth_shapes(object: &TruthObject) -> Vec<Primitive> {
-    object.parts.iter().flat_map(|p| p.shapes.iter().copied()).collect()
+/// Solid geometry to compare: primitives and closed or open triangle meshes (world frame).
+#[derive(Clone, Debug, Default)]
+pub struct Solids<'a> {
+    pub primitives: Vec<Primitive>,
+    /// Closed meshes count by their inside, open ones by the voxels their surface passes through.
+    pub meshes: Vec<&'a TruthMesh>,
 }
 
-/// (Chamfer, `IoU`) of a prediction against truth shapes, with the default sample count and grid.
-pub(crate) fn object_geometry(predicted: &[Primitive], truth: &[Primitive]) -> (Option<f32>, Option<f32>) {
-    (chamfer_distance(predicted, truth, CHAMFER_SAMPLES), voxel_iou(predicted, truth, VOXEL_RESOLUTION))
+impl<'a> Solids<'a> {
+    /// Primitives only.
+    #[must_use]
+    pub fn of_primitives(primitives: &[Primitive]) -> Self {
+        Self { primitives: primitives.to_vec(), meshes: Vec::new() }
+    }
+
+    /// Every primitive and mesh of every part of a truth object.
+    #[must_use]
+    pub fn of_truth(object: &'a TruthObject) -> Self {
+        Self {
+            primitives: object.parts.iter().flat_map(|p| p.shapes.iter().copied()).collect(),
+            meshes: object.parts.iter().flat_map(|p| p.meshes.iter()).collect(),
+        }
+    }
+
+    fn aabb(&self) -> Option<(Vec3, Vec3)> {
+        self.primitives
+            .iter()
+            .map(Primitive::aabb)
+            .chain(self.meshes.iter().filter_map(|m| m.aabb()))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+    }
+
+    /// About `n_total` surface samples split by surface area over primitives and meshes
+    /// (deterministic).
+    #[must_use]
+    pub fn sample(&self, n_total: usize) -> Vec<Vec3> {
+        let prim_areas: Vec<f32> = self.primitives.iter().map(|s| s.surface_area().max(0.0)).collect();
+        let mesh_areas: Vec<f32> = self.meshes.iter().map(|m| mesh::mesh_area(m)).collect();
+        let total: f32 = prim_areas.iter().chain(&mesh_areas).filter(|a| a.is_finite()).sum();
+        if total <= 0.0 || !total.is_finite() {
+            return Vec::new();
+        }
+        let share = |area: f32| ((n_total as f32 * area / total).round() as usize).max(1);
+        let mut out = Vec::with_capacity(n_total + self.primitives.len() + self.meshes.len());
+        for (shape, area) in self.primitives.iter().zip(&prim_areas) {
+            out.extend(shape.sample_surface(share(*area)));
+        }
+        for (m, area) in self.meshes.iter().zip(&mesh_areas) {
+            if area.is_finite() && *area > 0.0 {
+                out.extend(mesh::sample_mesh(m, share(*area)));
+            }
+        }
+        out
+    }
+}
+
+/// (Chamfer, `IoU`) of a prediction against a truth object (primitives and meshes), with the
+/// default sample count and grid.
+pub(crate) fn object_geometry(predicted: &[Primitive], truth: &TruthObject) -> (Option<f32>, Option<f32>) {
+    let pred = Solids::of_primitives(predicted);
+    let truth = Solids::of_truth(truth);
+    (chamfer_between(&pred, &truth, CHAMFER_SAMPLES), iou_between(&pred, &truth, VOXEL_RESOLUTION))
 }
 
 /// The truth object's unit box: its AABB centre and largest extent (metres).
@@ -96,14 +151,8 @@ struct UnitBox {
 }
 
 impl UnitBox {
-    fn of(shapes: &[Primitive]) -> Option<Self> {
-        let (first, rest) = shapes.split_first()?;
-        let (mut lo, mut hi) = first.aabb();
-        for s in rest {
-            let (a, b) = s.aabb();
-            lo = lo.min(a);
-            hi = hi.max(b);
-        }
+    fn of(solids: &Solids) -> Option<Self> {
+        let (lo, hi) = solids.aabb()?;
         let largest_extent_m = (hi - lo).max_element();
         (largest_extent_m.is_finite() && largest_extent_m > 1e-9).then_some(Self { center_world: 0.5 * (lo + hi), largest_extent_m })
     }
@@ -120,17 +169,7 @@ impl UnitBox {
 /// About `n_total` surface samples over several primitives, split by surface area (deterministic).
 #[must_use]
 pub fn sample_shapes(shapes: &[Primitive], n_total: usize) -> Vec<Vec3> {
-    let areas: Vec<f32> = shapes.iter().map(|s| s.surface_area().max(0.0)).collect();
-    let total: f32 = areas.iter().sum();
-    if total <= 0.0 || !total.is_finite() {
-        return Vec::new();
-    }
-    let mut out = Vec::with_capacity(n_total + shapes.len());
-    for (shape, area) in shapes.iter().zip(&areas) {
-        let n = ((n_total as f32 * area / total).round() as usize).max(1);
-        out.extend(shape.sample_surface(n));
-    }
-    out
+    Solids::of_primitives(shapes).sample(n_total)
 }
 
 /// Symmetric Chamfer distance between a prediction and the truth, both normalised by the truth's
@@ -140,10 +179,16 @@ pub fn sample_shapes(shapes: &[Primitive], n_total: usize) -> Vec<Vec3> {
 /// size"). `n_samples` samples are drawn on each side. `None` when either side has no surface.
 #[must_use]
 pub fn chamfer_distance(predicted: &[Primitive], truth: &[Primitive], n_samples: usize) -> Option<f32> {
+    chamfer_between(&Solids::of_primitives(predicted), &Solids::of_primitives(truth), n_samples)
+}
+
+/// [`chamfer_distance`] between any solids (meshes sampled by area like primitives).
+#[must_use]
+pub fn chamfer_between(predicted: &Solids, truth: &Solids, n_samples: usize) -> Option<f32> {
     let unit = UnitBox::of(truth)?;
     let to_unit = |pts: Vec<Vec3>| -> Vec<[f32; 3]> { pts.into_iter().map(|p| unit.to_unit(p).to_array()).collect() };
-    let pred = to_unit(sample_shapes(predicted, n_samples));
-    let gt = to_unit(sample_shapes(truth, n_samples));
+    let pred = to_unit(predicted.sample(n_samples));
+    let gt = to_unit(truth.sample(n_samples));
     Some(mean_nearest_distance(&pred, &gt)? + mean_nearest_distance(&gt, &pred)?)
 }
 
@@ -165,6 +210,13 @@ pub(crate) fn mean_nearest_distance(queries: &[[f32; 3]], targets: &[[f32; 3]]) 
 /// lies inside any solid primitive. `None` when the truth has no extent or occupies no voxel.
 #[must_use]
 pub fn voxel_iou(predicted: &[Primitive], truth: &[Primitive], resolution: usize) -> Option<f32> {
+    iou_between(&Solids::of_primitives(predicted), &Solids::of_primitives(truth), resolution)
+}
+
+/// [`voxel_iou`] between any solids: a closed mesh occupies the voxels whose centres it encloses
+/// (vertical ray parity), an open mesh the voxels its surface passes through.
+#[must_use]
+pub fn iou_between(predicted: &Solids, truth: &Solids, resolution: usize) -> Option<f32> {
     let unit = UnitBox::of(truth)?;
     let resolution = resolution.max(1);
     let half_side = 0.5 + VOXEL_MARGIN;
@@ -178,8 +230,7 @@ pub fn voxel_iou(predicted: &[Primitive], truth: &[Primitive], resolution: usize
     // Lattice bounds: the truth cube plus the predicted primitives' boxes.
     let mut lat_lo = [0_i64; 3];
     let mut lat_hi = [resolution as i64 - 1; 3];
-    for p in predicted {
-        let (lo, hi) = p.aabb();
+    for (lo, hi) in predicted.primitives.iter().map(Primitive::aabb).chain(predicted.meshes.iter().filter_map(|m| m.aabb())) {
         let (lo, hi) = (unit.to_unit(lo), unit.to_unit(hi));
         for axis in 0..3 {
             let (a, b) = index_range(lo[axis], hi[axis]);
@@ -190,9 +241,17 @@ pub fn voxel_iou(predicted: &[Primitive], truth: &[Primitive], resolution: usize
         }
     }
     let dims = [0, 1, 2].map(|a| (lat_hi[a] - lat_lo[a] + 1) as usize);
-    let rasterise = |shapes: &[Primitive]| -> Vec<bool> {
+    let lattice = WorldLattice {
+        origin_world: unit.to_world(Vec3::new(lat_lo[0] as f32, lat_lo[1] as f32, lat_lo[2] as f32) * pitch - Vec3::splat(half_side)),
+        pitch_m: pitch * unit.largest_extent_m,
+        dims,
+    };
+    let rasterise = |solids: &Solids| -> Vec<bool> {
         let mut grid = vec![false; dims[0] * dims[1] * dims[2]];
-        for s in shapes {
+        for m in &solids.meshes {
+            mesh::rasterise_mesh(m, &lattice, &mut grid);
+        }
+        for s in &solids.primitives {
             let (lo, hi) = s.aabb();
             let (lo, hi) = (unit.to_unit(lo), unit.to_unit(hi));
             let ranges = [0, 1, 2].map(|a| {
@@ -304,13 +363,31 @@ mod tests {
     }
 
     #[test]
+    fn a_mesh_box_scores_like_the_primitive_box() {
+        let lo = Vec3::new(1.0, -0.5, 0.0);
+        let hi = Vec3::new(1.8, 0.1, 1.2);
+        let mesh = crate::eval::mesh::box_mesh(lo, hi);
+        let prim = [Primitive::cuboid_at(0.5 * (lo + hi), hi - lo)];
+        let truth = Solids { primitives: vec![], meshes: vec![&mesh] };
+        let pred = Solids::of_primitives(&prim);
+        let c = chamfer_between(&pred, &truth, CHAMFER_SAMPLES).expect("chamfer");
+        assert!(c < 0.03, "{c}");
+        let iou = iou_between(&pred, &truth, VOXEL_RESOLUTION).expect("iou");
+        assert!(iou > 0.97, "{iou}");
+        // The upper half of the truth box: IoU one half.
+        let half = [Primitive::cuboid_at(Vec3::new(1.4, -0.2, 0.9), Vec3::new(0.8, 0.6, 0.6))];
+        let iou = iou_between(&Solids::of_primitives(&half), &truth, VOXEL_RESOLUTION).expect("iou");
+        assert!((iou - 0.5).abs() < 0.03, "{iou}");
+    }
+
+    #[test]
     fn evaluate_geometry_scores_every_truth_object_in_order() {
         use crate::truth::{TruthObject, TruthPart};
         let object = |id: ObjectId, center: Vec3| TruthObject {
             id,
             category: "cabinet".into(),
             supported_by: None,
-            parts: vec![TruthPart { id: id * 10, label: "body".into(), shapes: vec![unit_cube(center)] }],
+            parts: vec![TruthPart { id: id * 10, label: "body".into(), shapes: vec![unit_cube(center)], meshes: vec![] }],
             joints: vec![],
             contact_edges: vec![],
         };

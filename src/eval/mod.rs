@@ -11,6 +11,7 @@ mod aggregate;
 pub mod baseline;
 pub mod geometry;
 pub mod kinematics;
+pub mod mesh;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::{self, Write as _};
@@ -20,7 +21,9 @@ use serde::{Deserialize, Serialize};
 
 pub use aggregate::{Aggregate, BaselineMetrics, aggregate, evaluate_baseline};
 pub use baseline::object_level_baseline;
-pub use geometry::{GeometryScore, GeometrySummary, chamfer_distance, evaluate_geometry, sample_shapes, voxel_iou};
+pub use geometry::{
+    GeometryScore, GeometrySummary, Solids, chamfer_between, chamfer_distance, evaluate_geometry, iou_between, sample_shapes, voxel_iou,
+};
 pub use kinematics::{JointRow, average_precision};
 
 use crate::model::SceneModel;
@@ -115,7 +118,7 @@ pub fn evaluate(model: &SceneModel, truth: &GroundTruth) -> Metrics {
         .map(|t| {
             let predicted: Vec<Primitive> = model.parts_of(t.id).map(|p| p.primitive).collect();
             let model_parts: BTreeSet<PartId> = model.parts_of(t.id).map(|p| p.id).collect();
-            let (chamfer, iou) = geometry::object_geometry(&predicted, &geometry::truth_shapes(t));
+            let (chamfer, iou) = geometry::object_geometry(&predicted, t);
             let (ap, predicted_edges) = kinematics::edge_ap(model, t, &model_parts);
             let unobserved_parts = kinematics::unobserved_parts(model, t);
             let truth_edges: BTreeSet<[PartId; 2]> = t
@@ -387,7 +390,7 @@ mod tests {
     /// along -y), handle 4 (fixed to the door), top 5 (fixed).
     fn cabinet_truth() -> GroundTruth {
         let body = cuboid(Vec3::new(0.0, 0.0, 0.4), Vec3::new(0.6, 0.4, 0.8));
-        let part = |id: PartId, label: &str, shape: Primitive| TruthPart { id, label: label.into(), shapes: vec![shape] };
+        let part = |id: PartId, label: &str, shape: Primitive| TruthPart { id, label: label.into(), shapes: vec![shape], meshes: vec![] };
         let truth_object = TruthObject {
             id: 7,
             category: "cabinet".into(),

@@ -171,6 +171,7 @@ impl Furniture {
                 id: part_id(i),
                 label: p.label.to_string(),
                 shapes: p.shapes.iter().map(|s| Primitive::new(s.kind, s.size, world_from_object * s.world_from_primitive)).collect(),
+                meshes: Vec::new(),
             })
             .collect();
         let joints = self

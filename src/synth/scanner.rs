@@ -2,11 +2,15 @@
 //! primitives plus floor and walls, and every hit becomes a labelled point, with the flaws of a
 //! real part-segmented scan: depth noise growing with range, dropouts at grazing angles,
 //! segmentation bleed between touching parts, a few outliers, and occlusion from the ray casting.
+//! Truth parts may also carry triangle meshes (imported assets): rays hit them through parry's
+//! `TriMesh` (its own BVH).
 
 use std::collections::BTreeMap;
 
 use rand::Rng;
 use rand_distr::StandardNormal;
+use parry3d::query::{PointQuery, Ray, RayCast};
+use parry3d::shape::TriMesh;
 use rayon::prelude::*;
 
 use super::bvh::Bvh;
@@ -134,8 +138,7 @@ impl Camera {
 pub fn room_bounds(truth: &GroundTruth) -> (Vec2, Vec2) {
     let mut lo = Vec2::splat(f32::INFINITY);
     let mut hi = Vec2::splat(f32::NEG_INFINITY);
-    for shape in truth.objects.iter().flat_map(|o| o.parts.iter()).flat_map(|p| p.shapes.iter()) {
-        let (a, b) = shape.aabb();
+    for (a, b) in truth.objects.iter().flat_map(|o| o.parts.iter()).filter_map(crate::truth::TruthPart::aabb) {
         lo = lo.min(a.truncate());
         hi = hi.max(b.truncate());
     }
@@ -154,11 +157,75 @@ struct Label {
 
 const BACKGROUND: Label = Label { object: -1, part: -1 };
 
+/// A truth mesh the rays can hit.
+struct MeshTarget {
+    mesh: TriMesh,
+    label: Label,
+    lo: Vec3,
+    hi: Vec3,
+}
+
 /// Everything the rays can hit.
 struct World {
     primitives: Vec<Primitive>,
     labels: Vec<Label>,
     bvh: Bvh,
+    meshes: Vec<MeshTarget>,
+}
+
+/// Slab test of a ray against a box: whether it enters within `[0, t_max]`.
+fn ray_hits_box(origin: Vec3, dir: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> bool {
+    let inv = dir.recip();
+    let t0 = (lo - origin) * inv;
+    let t1 = (hi - origin) * inv;
+    t0.min(t1).max_element().max(0.0) <= t0.max(t1).min_element().min(t_max)
+}
+
+impl World {
+    /// Closest hit within `max_dist`: (label, distance, surface normal).
+    fn ray_cast(&self, origin: Vec3, dir: Vec3, max_dist: f32) -> Option<(Label, f32, Vec3)> {
+        let mut best = self.bvh.ray_cast(&self.primitives, origin, dir, max_dist).map(|(i, t, n)| (self.labels[i], t, n));
+        let ray = Ray::new(origin, dir);
+        for m in &self.meshes {
+            let t_max = best.map_or(max_dist, |b| b.1);
+            if !ray_hits_box(origin, dir, m.lo, m.hi, t_max) {
+                continue;
+            }
+            if let Some(hit) = m.mesh.cast_local_ray_and_get_normal(&ray, t_max, false)
+                && best.is_none_or(|b| hit.time_of_impact < b.1)
+            {
+                best = Some((m.label, hit.time_of_impact, hit.normal));
+            }
+        }
+        best
+    }
+
+    /// The nearest other truth part within `radius` of a surface point (ties: smaller part id).
+    fn nearest_other_part(&self, surface: Vec3, label: Label, radius: f32) -> Option<Label> {
+        let mut nearest: Option<(f32, Label)> = None;
+        let mut consider = |d: f32, other: Label| {
+            let closer = match nearest {
+                None => true,
+                Some((bd, bl)) => d.total_cmp(&bd).then(other.part.cmp(&bl.part)).is_lt(),
+            };
+            if d < radius && closer {
+                nearest = Some((d, other));
+            }
+        };
+        self.bvh.for_each_near(surface, radius, |j| {
+            let other = self.labels[j];
+            if other.part >= 0 && other.part != label.part {
+                consider(self.primitives[j].surface_distance(surface), other);
+            }
+        });
+        for m in &self.meshes {
+            if m.label.part == label.part || !(surface.cmpge(m.lo - radius) & surface.cmple(m.hi + radius)).all() {
+                continue;
+            }
+            consider(m.mesh.distance_to_local_point(surface, false), m.label);
+        }
+        nearest.map(|(_, l)| l)
+    }
 }
 
 fn build_world(truth: &GroundTruth, cfg: &ScannerConfig) -> World {
@@ -190,13 +257,21 @@ fn build_world(truth: &GroundTruth, cfg: &ScannerConfig) -> World {
         labels.push(BACKGROUND);
     }
     let bvh = Bvh::new(&primitives);
-    World { primitives, labels, bvh }
+    let mut meshes = Vec::new();
+    for object in &truth.objects {
+        for part in &object.parts {
+            for m in &part.meshes {
+                let (Some((lo, hi)), Ok(mesh)) = (m.aabb(), TriMesh::new(m.vertices.clone(), m.triangles.clone())) else { continue };
+                meshes.push(MeshTarget { mesh, label: Label { object: object.id, part: part.id }, lo, hi });
+            }
+        }
+    }
+    World { primitives, labels, bvh, meshes }
 }
 
 /// Whether a camera standing at `xy` keeps 0.35 m from every object.
 fn is_free(truth: &GroundTruth, xy: Vec2) -> bool {
-    truth.objects.iter().flat_map(|o| o.parts.iter()).flat_map(|p| p.shapes.iter()).all(|s| {
-        let (a, b) = s.aabb();
+    truth.objects.iter().flat_map(|o| o.parts.iter()).filter_map(crate::truth::TruthPart::aabb).all(|(a, b)| {
         let margin = 0.35;
         xy.x < a.x - margin || xy.x > b.x + margin || xy.y < a.y - margin || xy.y > b.y + margin
     })
@@ -204,10 +279,7 @@ fn is_free(truth: &GroundTruth, xy: Vec2) -> bool {
 
 /// World bounds of an object's shapes.
 fn object_bounds(object: &TruthObject) -> (Vec3, Vec3) {
-    object.parts.iter().flat_map(|p| p.shapes.iter()).fold((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)), |(lo, hi), s| {
-        let (a, b) = s.aabb();
-        (lo.min(a), hi.max(b))
-    })
+    object.aabb().unwrap_or((Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)))
 }
 
 /// Sum of the horizontal directions an object's movable parts face (the outward normal of each
@@ -257,7 +329,10 @@ impl Group {
 /// (moving closer if needed); a group with no free spot gets no camera.
 fn cameras(truth: &GroundTruth, cfg: &ScannerConfig, seed: u64) -> Vec<Camera> {
     let mut r = rng(seed ^ 0xCA3E_5A11);
+    // Cameras may stand anywhere inside the walls (`wall_gap_m` beyond the furniture).
     let (lo, hi) = room_bounds(truth);
+    let gap = Vec2::splat(cfg.wall_gap_m.max(0.0));
+    let (lo, hi) = (lo - gap, hi + gap);
     let extent = (hi - lo).max(Vec2::splat(0.5));
     let tiles_x = (extent.x / cfg.tile_size_m.max(1.0)).ceil().max(1.0) as usize;
     let tiles_y = (extent.y / cfg.tile_size_m.max(1.0)).ceil().max(1.0) as usize;
@@ -392,7 +467,7 @@ fn scan_row(world: &World, cfg: &ScannerConfig, camera: &Camera, row: usize, see
     for col in 0..w {
         let x_ndc = (2.0 * (col as f32 + 0.5) / w as f32 - 1.0) * tan_x;
         let dir = (camera.forward + camera.right * x_ndc + camera.up * y_ndc).normalize();
-        let Some((index, t, normal)) = world.bvh.ray_cast(&world.primitives, camera.eye, dir, cfg.max_range_m) else {
+        let Some((hit_label, t, normal)) = world.ray_cast(camera.eye, dir, cfg.max_range_m) else {
             continue;
         };
         let mut normal = normal.normalize_or(-dir);
@@ -403,28 +478,13 @@ fn scan_row(world: &World, cfg: &ScannerConfig, camera: &Camera, row: usize, see
             continue; // grazing: the sensor returns nothing
         }
         let surface = camera.eye + dir * t;
-        let mut label = world.labels[index];
-        if cfg.stray_fraction > 0.0 && cfg.stray_radius_m > 0.0 {
-            let mut nearest: Option<(f32, Label)> = None;
-            world.bvh.for_each_near(surface, cfg.stray_radius_m, |j| {
-                let other = world.labels[j];
-                if other.part < 0 || other.part == label.part {
-                    return;
-                }
-                let d = world.primitives[j].surface_distance(surface);
-                let closer = match nearest {
-                    None => true,
-                    Some((bd, bl)) => d.total_cmp(&bd).then(other.part.cmp(&bl.part)).is_lt(),
-                };
-                if d < cfg.stray_radius_m && closer {
-                    nearest = Some((d, other));
-                }
-            });
-            if let Some((_, other)) = nearest
-                && r.random::<f32>() < cfg.stray_fraction
-            {
-                label = other;
-            }
+        let mut label = hit_label;
+        if cfg.stray_fraction > 0.0
+            && cfg.stray_radius_m > 0.0
+            && let Some(other) = world.nearest_other_part(surface, label, cfg.stray_radius_m)
+            && r.random::<f32>() < cfg.stray_fraction
+        {
+            label = other;
         }
         let sigma = cfg.depth_noise_m.max(0.0) * t;
         let mut point = camera.eye + dir * (t + sigma * gaussian(&mut r));

@@ -1,0 +1,267 @@
+//! Scanning an asset and scoring it: partial noisy and clean complete scans, the part-level
+//! reconstruction and the object-level baseline, per object and per category tables.
+
+use std::collections::BTreeMap;
+use std::fmt::{self, Write as _};
+use std::path::Path;
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use super::manifest::{AssetEntry, find_assets};
+use super::truth::{AssetTruth, AssetTruthOptions, asset_truth, category_from_file_name};
+use super::BenchError;
+use crate::eval::{BaselineMetrics, Metrics, evaluate, evaluate_baseline};
+use crate::pipeline::{PinnedEdits, PipelineConfig, Quiet, reconstruct};
+use crate::report::Warning;
+use crate::scan::Scan;
+use crate::synth::ScannerConfig;
+
+/// Scanner settings for a single asset: walls 2 m beyond it (room for cameras), 8 viewpoints
+/// (partial) or the clean complete preset.
+#[must_use]
+pub fn asset_scanner_config(clean: bool) -> ScannerConfig {
+    let base = if clean { ScannerConfig::clean_complete() } else { ScannerConfig { viewpoints: 8, ..ScannerConfig::default() } };
+    ScannerConfig { wall_gap_m: 2.0, ..base }
+}
+
+/// Benchmark settings.
+#[derive(Clone, Debug)]
+pub struct BenchConfig {
+    pub partial: ScannerConfig,
+    pub clean: ScannerConfig,
+    pub pipeline: PipelineConfig,
+    pub seed: u64,
+}
+
+impl Default for BenchConfig {
+    fn default() -> Self {
+        Self { partial: asset_scanner_config(false), clean: asset_scanner_config(true), pipeline: PipelineConfig::default(), seed: 0 }
+    }
+}
+
+/// Loads an asset, converts it to ground truth and scans it.
+pub fn scan_asset(entry: &AssetEntry, cfg: &ScannerConfig, seed: u64) -> Result<(AssetTruth, Scan, Vec<Warning>), BenchError> {
+    let asset = crate::assets::load_asset(&entry.path)?;
+    let category = entry.category.clone().unwrap_or_else(|| category_from_file_name(&entry.path));
+    let truth = asset_truth(&asset, &AssetTruthOptions { category, up: entry.up })?;
+    let mut scan = crate::synth::scan(&truth.truth, cfg, seed);
+    scan.source = entry.path.display().to_string();
+    let mut warnings = asset.warnings;
+    warnings.extend(truth.warnings.iter().cloned());
+    Ok((truth, scan, warnings))
+}
+
+/// Scores of one scan setting of one asset.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SettingResult {
+    pub scan_points: usize,
+    pub scanned_parts: usize,
+    pub metrics: Metrics,
+    pub baseline: BaselineMetrics,
+    /// Scan + reconstruction + evaluation, seconds.
+    pub seconds: f64,
+}
+
+/// Both settings of one asset.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ObjectResult {
+    pub name: String,
+    pub path: String,
+    pub category: String,
+    pub parts: usize,
+    /// Truth part id → label and asset link.
+    pub part_labels: BTreeMap<i64, (String, String)>,
+    pub movable_joints: usize,
+    pub partial: SettingResult,
+    pub clean: SettingResult,
+    pub warnings: Vec<Warning>,
+}
+
+/// Scans, reconstructs and scores one asset with both settings.
+pub fn bench_asset(entry: &AssetEntry, cfg: &BenchConfig) -> Result<ObjectResult, BenchError> {
+    let run = |scanner: &ScannerConfig| -> Result<(AssetTruth, SettingResult, Vec<Warning>), BenchError> {
+        let start = Instant::now();
+        let (truth, scan, warnings) = scan_asset(entry, scanner, cfg.seed)?;
+        let model = reconstruct(&scan, &cfg.pipeline, &PinnedEdits::default(), &Quiet);
+        let metrics = evaluate(&model, &truth.truth);
+        let baseline = evaluate_baseline(&scan, &truth.truth);
+        let result = SettingResult {
+            scan_points: scan.point_count(),
+            scanned_parts: scan.parts.len(),
+            metrics,
+            baseline,
+            seconds: start.elapsed().as_secs_f64(),
+        };
+        Ok((truth, result, warnings))
+    };
+    let (truth, partial, warnings) = run(&cfg.partial)?;
+    let (_, clean, _) = run(&cfg.clean)?;
+    let object = &truth.truth.objects[0];
+    Ok(ObjectResult {
+        name: entry.name.clone(),
+        path: entry.path.display().to_string(),
+        category: object.category.clone(),
+        parts: object.parts.len(),
+        part_labels: object
+            .parts
+            .iter()
+            .map(|p| (p.id, (p.label.clone(), truth.part_links.get(&p.id).cloned().unwrap_or_default())))
+            .collect(),
+        movable_joints: object.joints.iter().filter(|j| j.kind.is_movable()).count(),
+        partial,
+        clean,
+        warnings,
+    })
+}
+
+/// Totals of one setting over a set of objects.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Totals {
+    pub objects: usize,
+    pub part_chamfer: Option<f32>,
+    pub object_chamfer: Option<f32>,
+    pub part_iou: Option<f32>,
+    pub object_iou: Option<f32>,
+    /// Mean kinematic-edge AP over objects with truth edges.
+    pub map: Option<f32>,
+    pub movable_joints: usize,
+    pub movable_correct: usize,
+    pub movable_type_accuracy: Option<f32>,
+    pub median_axis_error_deg: Option<f32>,
+    pub median_hinge_distance_m: Option<f32>,
+}
+
+fn mean(values: impl Iterator<Item = f32>) -> Option<f32> {
+    let (s, n) = values.filter(|v| v.is_finite()).fold((0.0_f64, 0_usize), |(s, n), v| (s + f64::from(v), n + 1));
+    (n > 0).then(|| (s / n as f64) as f32)
+}
+
+fn median(mut values: Vec<f32>) -> Option<f32> {
+    values.retain(|v| v.is_finite());
+    values.sort_by(f32::total_cmp);
+    let n = values.len();
+    (n > 0).then(|| if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) })
+}
+
+impl Totals {
+    /// Totals of one setting (`clean` picks the clean complete scans) over objects.
+    #[must_use]
+    pub fn of<'a>(objects: &[&'a ObjectResult], clean: bool) -> Self {
+        let pick = |o: &'a ObjectResult| -> &'a SettingResult { if clean { &o.clean } else { &o.partial } };
+        let rows = objects.iter().flat_map(|o| pick(o).metrics.objects.iter());
+        let joints = rows.clone().flat_map(|r| r.joints.iter()).filter(|j| j.truth_kind.is_movable());
+        let movable_joints = joints.clone().count();
+        let movable_correct = joints.clone().filter(|j| j.type_correct).count();
+        Self {
+            objects: objects.len(),
+            part_chamfer: mean(rows.clone().filter_map(|r| r.chamfer)),
+            object_chamfer: mean(objects.iter().flat_map(|o| pick(o).baseline.objects.iter()).filter_map(|g| g.chamfer)),
+            part_iou: mean(rows.clone().filter_map(|r| r.iou)),
+            object_iou: mean(objects.iter().flat_map(|o| pick(o).baseline.objects.iter()).filter_map(|g| g.iou)),
+            map: mean(rows.clone().filter_map(|r| r.ap)),
+            movable_joints,
+            movable_correct,
+            movable_type_accuracy: (movable_joints > 0).then(|| movable_correct as f32 / movable_joints as f32),
+            median_axis_error_deg: median(joints.clone().filter_map(|j| j.axis_error_deg).collect()),
+            median_hinge_distance_m: median(joints.filter_map(|j| j.hinge_distance_m).collect()),
+        }
+    }
+}
+
+/// The benchmark over a folder.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct BenchReport {
+    pub objects: Vec<ObjectResult>,
+    /// Assets that could not be benchmarked: (name, error).
+    pub failed: Vec<(String, String)>,
+    pub partial: Totals,
+    pub clean: Totals,
+    /// Category → (partial, clean) totals.
+    pub categories: BTreeMap<String, (Totals, Totals)>,
+    pub seconds: f64,
+}
+
+/// Benchmarks every asset under `dir` ([`find_assets`]), calling `progress(done, total, name)`
+/// after each. Assets that fail are listed in `failed`, the rest are still scored.
+pub fn bench_dir(dir: &Path, cfg: &BenchConfig, progress: &dyn Fn(usize, usize, &str)) -> Result<BenchReport, BenchError> {
+    let start = Instant::now();
+    let entries = find_assets(dir)?;
+    let mut report = BenchReport::default();
+    for (i, entry) in entries.iter().enumerate() {
+        match bench_asset(entry, cfg) {
+            Ok(r) => report.objects.push(r),
+            Err(e) => report.failed.push((entry.name.clone(), e.to_string())),
+        }
+        progress(i + 1, entries.len(), &entry.name);
+    }
+    let all: Vec<&ObjectResult> = report.objects.iter().collect();
+    report.partial = Totals::of(&all, false);
+    report.clean = Totals::of(&all, true);
+    let categories: std::collections::BTreeSet<String> = report.objects.iter().map(|o| o.category.clone()).collect();
+    for c in categories {
+        let of: Vec<&ObjectResult> = report.objects.iter().filter(|o| o.category == c).collect();
+        report.categories.insert(c.clone(), (Totals::of(&of, false), Totals::of(&of, true)));
+    }
+    report.seconds = start.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+fn num(v: Option<f32>, digits: usize) -> String {
+    v.map_or_else(|| "-".to_owned(), |v| format!("{v:.digits$}"))
+}
+
+fn row_cells(t: &Totals) -> String {
+    format!(
+        "{} vs {} | {} vs {} | {} | {}/{} | {} | {}",
+        num(t.part_chamfer, 3),
+        num(t.object_chamfer, 3),
+        num(t.part_iou, 3),
+        num(t.object_iou, 3),
+        num(t.map, 3),
+        t.movable_correct,
+        t.movable_joints,
+        num(t.median_axis_error_deg, 1),
+        num(t.median_hinge_distance_m.map(|m| m * 100.0), 1),
+    )
+}
+
+const HEADER: &str = "| {} | setting | Chamfer ↓ part vs object | IoU ↑ part vs object | edge mAP | movable types | axis err ° (median) | hinge cm (median) |\n| --- | --- | --- | --- | ---: | ---: | ---: | ---: |\n";
+
+impl BenchReport {
+    /// The tables as markdown: per object, per category, all.
+    #[must_use]
+    pub fn markdown(&self) -> String {
+        let mut out = String::new();
+        let totals_of = |o: &ObjectResult, clean: bool| Totals::of(&[o], clean);
+        let _ = writeln!(out, "### Per object\n");
+        out.push_str(&HEADER.replace("{}", "object"));
+        for o in &self.objects {
+            for (name, clean) in [("partial", false), ("clean", true)] {
+                let _ = writeln!(out, "| {} ({}) | {name} | {} |", o.name, o.category, row_cells(&totals_of(o, clean)));
+            }
+        }
+        let _ = writeln!(out, "\n### Per category\n");
+        out.push_str(&HEADER.replace("{}", "category"));
+        for (c, (p, k)) in &self.categories {
+            let _ = writeln!(out, "| {c} ({}) | partial | {} |", p.objects, row_cells(p));
+            let _ = writeln!(out, "| {c} ({}) | clean | {} |", k.objects, row_cells(k));
+        }
+        let _ = writeln!(out, "| **all** ({}) | partial | {} |", self.partial.objects, row_cells(&self.partial));
+        let _ = writeln!(out, "| **all** ({}) | clean | {} |", self.clean.objects, row_cells(&self.clean));
+        if !self.failed.is_empty() {
+            let _ = writeln!(out, "\nFailed:\n");
+            for (n, e) in &self.failed {
+                let _ = writeln!(out, "- {n}: {e}");
+            }
+        }
+        out
+    }
+}
+
+impl fmt::Display for BenchReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.markdown())?;
+        writeln!(f, "\n{} objects in {:.1} s", self.objects.len(), self.seconds)
+    }
+}
