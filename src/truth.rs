@@ -75,7 +75,11 @@ impl TruthPart {
     /// World-frame bounds of every primitive and mesh of the part; `None` without geometry.
     #[must_use]
     pub fn aabb(&self) -> Option<(Vec3, Vec3)> {
-        self.shapes.iter().map(Primitive::aabb).chain(self.meshes.iter().filter_map(TruthMesh::aabb)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+        self.shapes
+            .iter()
+            .map(Primitive::aabb)
+            .chain(self.meshes.iter().filter_map(TruthMesh::aabb))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 }
 

@@ -66,7 +66,8 @@ fn scan_asset_output_parses_back_with_labels_and_truth() {
     assert!(floor_z.abs() < 0.02, "floor at {floor_z}");
     let lowest_part = scan.parts.iter().flat_map(|p| p.points.iter()).map(|p| p.z).fold(f32::INFINITY, f32::min);
     assert!(lowest_part > -0.1 && lowest_part < 0.05, "lowest part point {lowest_part}");
-    let gt: GroundTruth = serde_json::from_str(&std::fs::read_to_string(dir.path().join("scan/cabinet.gt.json")).expect("gt")).expect("gt parses");
+    let gt: GroundTruth =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("scan/cabinet.gt.json")).expect("gt")).expect("gt parses");
     let o = &gt.objects[0];
     assert_eq!(o.category, "cabinet");
     let kinds: Vec<JointKind> = o.joints.iter().map(|j| j.kind).collect();
@@ -90,7 +91,8 @@ fn one_shared_object_runs_end_to_end() {
     let fridge = entries.iter().find(|e| e.name.ends_with("fridge")).expect("fridge row");
     assert!(fridge.path.ends_with("fridge_obj.urdf"));
     let asset = partscene::assets::load_asset(&fridge.path).expect("load");
-    let truth = asset_truth(&asset, &partscene::bench::AssetTruthOptions { category: "Refrigerator".into(), up: fridge.up }).expect("truth");
+    let truth =
+        asset_truth(&asset, &partscene::bench::AssetTruthOptions { category: "Refrigerator".into(), up: fridge.up }).expect("truth");
     let (lo, hi) = truth.truth.objects[0].aabb().expect("bounds");
     assert!(lo.z.abs() < 1e-4 && hi.z > 1.8, "stands 1.9 m tall on the floor: {lo} {hi}");
 

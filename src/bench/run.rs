@@ -8,9 +8,9 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use super::BenchError;
 use super::manifest::{AssetEntry, find_assets};
 use super::truth::{AssetTruth, AssetTruthOptions, asset_truth, category_from_file_name};
-use super::BenchError;
 use crate::eval::{BaselineMetrics, Metrics, evaluate, evaluate_baseline};
 use crate::pipeline::{PinnedEdits, PipelineConfig, Quiet, reconstruct};
 use crate::report::Warning;

@@ -66,7 +66,8 @@ const LABEL_WORDS: &[(&str, &str)] = &[
     ("flap", "flap"),
     ("shelf", "shelf"),
     ("leg", "leg"),
-    ("window", "window"),
+    // The moving part of a window is its sash.
+    ("window", "sash"),
     ("burner", "burner"),
     ("plate", "plate"),
     ("hood", "hood"),
@@ -199,7 +200,10 @@ pub fn asset_truth(asset: &ArticulatedAsset, options: &AssetTruthOptions) -> Res
         let meshes = raw
             .meshes
             .iter()
-            .map(|m| TruthMesh { vertices: m.vertices.iter().map(|v| world_from_asset.transform_point(*v)).collect(), triangles: m.triangles.clone() })
+            .map(|m| TruthMesh {
+                vertices: m.vertices.iter().map(|v| world_from_asset.transform_point(*v)).collect(),
+                triangles: m.triangles.clone(),
+            })
             .collect();
         parts.push(TruthPart { id, label, shapes, meshes });
         part_links.insert(id, raw.link.to_owned());
@@ -272,7 +276,16 @@ mod tests {
     }
 
     fn joint(name: &str, kind: JointKind, parent: &str, child: &str, axis: Vec3, origin: Vec3) -> AssetJoint {
-        AssetJoint { name: name.into(), kind, parent: parent.into(), child: child.into(), axis_world: axis, origin_world: origin, lower: 0.0, upper: f32::INFINITY }
+        AssetJoint {
+            name: name.into(),
+            kind,
+            parent: parent.into(),
+            child: child.into(),
+            axis_world: axis,
+            origin_world: origin,
+            lower: 0.0,
+            upper: f32::INFINITY,
+        }
     }
 
     #[test]

@@ -6,6 +6,7 @@
 //! | handle, pull, bar, leg, body, ... (anything else) | fixed | — | child centre | 0 |
 //! | drawer, tray | prismatic | the parent's face normal the part sits on, outward | child centre | 0 .. `drawer_travel` × parent depth |
 //! | door, lid, flap, hatch | revolute | the door edge away from its handle (vertical for side doors without one) | on that edge, at the door's back face | 0 .. `revolute_upper_rad` |
+//! | slide, slider, sliding, sash | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
 //! | knob, dial | revolute | the outward face normal | knob centre | −π .. π |
 //! | button, switch | prismatic | into the parent | button centre | 0 .. `button_travel_m` |
 //!
@@ -66,7 +67,10 @@ const TYPICAL_PARENTS: &[(&[&str], &[&str])] = &[
     (&["leg", "legs"], &["top", "seat", "base", "frame"]),
     (&["headboard", "footboard", "mattress"], &["frame", "base"]),
     (&["back", "backrest", "arm", "armrest"], &["seat"]),
-    (&["door", "doors", "drawer", "drawers", "lid", "flap", "shelf", "hatch"], &["body", "frame", "base", "cabinet", "carcass"]),
+    (
+        &["door", "doors", "drawer", "drawers", "lid", "flap", "shelf", "hatch", "slide", "slider", "sash"],
+        &["body", "frame", "base", "cabinet", "carcass"],
+    ),
 ];
 
 /// Whether `parent_label` names a typical parent of `child_label` ([`TYPICAL_PARENTS`]).
@@ -88,13 +92,18 @@ pub fn joint_kind_for_label(label: &str) -> JointKind {
         JointKind::Fixed
     } else if has(&["knob", "knobs", "dial", "valve"]) {
         JointKind::Revolute
-    } else if has(&["button", "buttons", "switch", "drawer", "drawers", "tray"]) {
+    } else if has(&["button", "buttons", "switch", "drawer", "drawers", "tray"]) || is_sliding_panel(label) {
         JointKind::Prismatic
     } else if has(&["door", "doors", "lid", "flap", "hatch"]) {
         JointKind::Revolute
     } else {
         JointKind::Fixed
     }
+}
+
+/// A panel that slides in its own plane: a sliding door, a window sash.
+fn is_sliding_panel(label: &str) -> bool {
+    label_tokens(label).any(|t| matches!(t.as_str(), "slide" | "slider" | "sliding" | "sash"))
 }
 
 fn is_rotary_knob(label: &str) -> bool {
@@ -150,7 +159,8 @@ pub fn estimate_joint(
     mount_normal: Option<Vec3>,
     cfg: &KinematicsConfig,
 ) -> Joint {
-    let side_opening = label_tokens(child_label).any(|t| matches!(t.as_str(), "door" | "doors" | "drawer" | "drawers" | "tray"));
+    let side_opening = is_sliding_panel(child_label)
+        || label_tokens(child_label).any(|t| matches!(t.as_str(), "door" | "doors" | "drawer" | "drawers" | "tray"));
     let out = match mount_normal {
         Some(n) if !(side_opening && n.dot(UP).abs() > 0.7) => n.normalize_or(Vec3::Z),
         _ => outward_direction(parent, child, handle),
@@ -159,6 +169,23 @@ pub fn estimate_joint(
         Joint { parent: parent_id, child: child_id, kind, axis_world: out, origin_world: child.center(), lower: 0.0, upper: 0.0 };
     match kind {
         JointKind::Fixed => {}
+        JointKind::Prismatic if is_sliding_panel(child_label) => {
+            // In its own plane, along the panel's box axis that points towards the parent's
+            // centre: that is where the panel has room to go (a sliding door over half a front,
+            // a sash over the lower half of its frame); travel up to that gap.
+            let towards = parent.center() - child.center();
+            let in_plane = towards - out * towards.dot(out);
+            let axes = child.axes_world();
+            let axis = axes
+                .iter()
+                .filter(|a| a.dot(out).abs() < 0.5)
+                .max_by(|a, b| a.dot(in_plane).abs().total_cmp(&b.dot(in_plane).abs()))
+                .copied()
+                .unwrap_or(axes[0]);
+            let axis = if axis.dot(in_plane) < 0.0 { -axis } else { axis };
+            joint.axis_world = axis;
+            joint.upper = (2.0 * in_plane.dot(axis)).max(0.0).min(extent_along(parent, axis));
+        }
         JointKind::Prismatic if is_button(child_label) => {
             joint.axis_world = -out;
             joint.upper = cfg.button_travel_m;
@@ -306,5 +333,16 @@ mod tests {
         let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
         let j = estimate_joint(1, &body, 2, &door, "door", JointKind::Revolute, Some(Vec3::new(0.36, 0.29, 0.5)), Some(Vec3::Z), &cfg);
         assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "{j:?}");
+    }
+
+    #[test]
+    fn a_sliding_panel_slides_in_its_plane_towards_the_open_side() {
+        let body = cabinet_body(); // front face at y = 0.25, x in [-0.4, 0.4]
+        let panel = Primitive::cuboid_at(Vec3::new(-0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
+        check("sliding_door", JointKind::Prismatic);
+        check("sash", JointKind::Prismatic);
+        let j = estimate_joint(1, &body, 2, &panel, "slide", JointKind::Prismatic, None, Some(Vec3::Y), &KinematicsConfig::default());
+        assert!(j.axis_world.dot(Vec3::X) > 0.999, "{j:?}");
+        assert!((j.upper - 0.4).abs() < 1e-4, "{j:?}");
     }
 }

@@ -7,10 +7,10 @@
 
 use std::collections::BTreeMap;
 
-use rand::Rng;
-use rand_distr::StandardNormal;
 use parry3d::query::{PointQuery, Ray, RayCast};
 use parry3d::shape::TriMesh;
+use rand::Rng;
+use rand_distr::StandardNormal;
 use rayon::prelude::*;
 
 use super::bvh::Bvh;
