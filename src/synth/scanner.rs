@@ -61,6 +61,9 @@ pub struct ScannerConfig {
     pub wall_gap_m: f32,
     /// Whether the scan carries per-point normals.
     pub normals: bool,
+    /// Raise the highest camera to 0.4 m above the tallest object (a complete scan must see the
+    /// top of a 2.4 m oven); off for hand-held-like partial scans.
+    pub cameras_above_objects: bool,
 }
 
 impl Default for ScannerConfig {
@@ -88,6 +91,7 @@ impl Default for ScannerConfig {
             wall_height_m: 2.6,
             wall_gap_m: 0.0,
             normals: true,
+            cameras_above_objects: false,
         }
     }
 }
@@ -109,6 +113,7 @@ impl ScannerConfig {
             normal_noise_rad: 0.0,
             stray_fraction: 0.0,
             outlier_fraction: 0.0,
+            cameras_above_objects: true,
             ..Self::default()
         }
     }
@@ -337,7 +342,11 @@ fn cameras(truth: &GroundTruth, cfg: &ScannerConfig, seed: u64) -> Vec<Camera> {
     let tiles_x = (extent.x / cfg.tile_size_m.max(1.0)).ceil().max(1.0) as usize;
     let tiles_y = (extent.y / cfg.tile_size_m.max(1.0)).ceil().max(1.0) as usize;
     let tile = extent / Vec2::new(tiles_x as f32, tiles_y as f32);
-    let (h_lo, h_hi) = cfg.camera_height_m;
+    let (h_lo, mut h_hi) = cfg.camera_height_m;
+    if cfg.cameras_above_objects {
+        let tallest = truth.objects.iter().map(|o| object_bounds(o).1.z).fold(0.0_f32, f32::max);
+        h_hi = h_hi.max(tallest + 0.4);
+    }
     let (d_lo, d_hi) = cfg.view_distance_m;
     let jitter = cfg.view_angle_jitter_deg.abs().to_radians();
     let fit_tan = (0.45 * cfg.horizontal_fov_deg.clamp(1.0, 170.0)).to_radians().tan();
