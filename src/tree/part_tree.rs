@@ -14,8 +14,9 @@
 //!   the frame and the mattress end — but the part is mounted on its typical parent. The prior
 //!   only chooses among real contacts; it never creates an edge.
 //!
-//! A part with no contact at all is attached to its nearest part by a fallback edge far lighter
-//! than any contact, and reported.
+//! A part with no contact at all is attached by a fallback edge far lighter than any contact, and
+//! reported: to a typical parent of its label when the object has one (the headboard of a bed whose
+//! frame was seen only over its foot half), else to its nearest part.
 
 use std::collections::BTreeMap;
 
@@ -160,7 +161,13 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
             let weight = match contacts.get(&(p.id, c.id)) {
                 Some(pc) if is_typical_parent(c.label, p.label) => f64::from(pc.weight * cfg.label_prior),
                 Some(pc) => f64::from(pc.weight),
-                None => FALLBACK_WEIGHT / (1.0 + f64::from(primitive_gap(p.primitive, c.primitive))),
+                // No contact: a typical parent of the child's label beats any other part, the
+                // nearest within each group (weights in (1, 2] and (0, 1] × FALLBACK_WEIGHT).
+                None => {
+                    let nearness = 1.0 / (1.0 + f64::from(primitive_gap(p.primitive, c.primitive)));
+                    let typical = if is_typical_parent(c.label, p.label) { 1.0 } else { 0.0 };
+                    FALLBACK_WEIGHT * (typical + nearness)
+                }
             };
             edges.push(WeightedEdge { from: pi + 1, to: ci + 1, weight });
             edge_pairs.push(Some((p.id, c.id)));
@@ -245,5 +252,22 @@ mod tests {
         assert_eq!(tree.parent.get(&3), Some(&2));
         assert!(tree.parent.contains_key(&9));
         assert!(warnings.iter().any(|w| w.subject == "part 9"), "{warnings:?}");
+    }
+
+    #[test]
+    fn a_part_touching_nothing_goes_to_its_typical_parent_before_the_nearest_part() {
+        // A bed whose frame was seen only over its foot half: the headboard (x ≈ 0) touches
+        // nothing; the mattress is 8 cm away, the frame 80 cm.
+        let frame = Primitive::cuboid_at(Vec3::new(1.6, 0.0, 0.2), Vec3::new(0.85, 1.3, 0.4));
+        let mattress = Primitive::cuboid_at(Vec3::new(1.07, 0.0, 0.52), Vec3::new(1.92, 1.24, 0.24));
+        let headboard = Primitive::cuboid_at(Vec3::new(0.02, 0.0, 0.57), Vec3::new(0.05, 1.37, 0.9));
+        let view = [
+            TreePart { id: 1, label: "frame", primitive: &frame },
+            TreePart { id: 2, label: "mattress", primitive: &mattress },
+            TreePart { id: 3, label: "headboard", primitive: &headboard },
+        ];
+        let (tree, warnings) = build_part_tree(&view, &TreeConfig::default(), &BTreeMap::new());
+        assert_eq!(tree.parent.get(&3), Some(&1), "{:?}", tree.parent);
+        assert!(warnings.iter().any(|w| w.subject == "part 3"), "reported: {warnings:?}");
     }
 }
