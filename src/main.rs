@@ -124,14 +124,12 @@ struct Bars {
 }
 
 impl Bars {
-    fn new(enabled: bool) -> Self {
+    /// Counting `unit` (parts, assets), with the current item as the message.
+    fn new(enabled: bool, unit: &str) -> Self {
         let bar = (enabled && std::io::IsTerminal::is_terminal(&std::io::stderr())).then(|| {
             let b = ProgressBar::new(0);
-            b.set_style(
-                ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} parts ({elapsed})")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar())
-                    .progress_chars("=> "),
-            );
+            let template = format!("{{msg:>16}} [{{bar:40}}] {{pos}}/{{len}} {unit} ({{elapsed}})");
+            b.set_style(ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar()).progress_chars("=> "));
             b
         });
         Self { bar }
@@ -241,7 +239,7 @@ fn summary(scene: &SceneModel, seconds: f64) -> String {
 
 fn reconstruct_cmd(scan_path: &Path, out: &Path, cfg: &PipelineConfig, json: bool) -> Result<()> {
     let (scan, scan_warnings) = read_scan(scan_path)?;
-    let bars = Bars::new(!json);
+    let bars = Bars::new(!json, "parts");
     let t = Instant::now();
     let mut scene = reconstruct(&scan, cfg, &PinnedEdits::default(), &bars);
     bars.finish();
@@ -303,7 +301,7 @@ fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, cfg: &PipelineCo
         let t = Instant::now();
         let (truth, scan) = if clean { partscene::synth::demo_clean(s) } else { partscene::synth::demo(s) };
         let scan_secs = t.elapsed().as_secs_f64();
-        let bars = Bars::new(!json);
+        let bars = Bars::new(!json, "parts");
         let t = Instant::now();
         let scene = reconstruct(&scan, cfg, &PinnedEdits::default(), &bars);
         bars.finish();
@@ -399,26 +397,10 @@ fn scan_asset_cmd(
 
 fn bench_cmd(dir: &Path, markdown: Option<&Path>, seed: u64, pipeline: &PipelineConfig, json: bool) -> Result<()> {
     let cfg = bench::BenchConfig { pipeline: pipeline.clone(), seed, ..bench::BenchConfig::default() };
-    let bar = (!json && std::io::IsTerminal::is_terminal(&std::io::stderr())).then(|| {
-        let b = ProgressBar::new(0);
-        b.set_style(
-            ProgressStyle::with_template("{msg:>24} [{bar:40}] {pos}/{len} assets ({elapsed})")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> "),
-        );
-        b
-    });
-    let progress = |done: usize, total: usize, name: &str| {
-        if let Some(b) = &bar {
-            b.set_length(total as u64);
-            b.set_position(done as u64);
-            b.set_message(name.to_owned());
-        }
-    };
+    let bars = Bars::new(!json, "assets");
+    let progress = |done: usize, total: usize, name: &str| bars.update(name, done, total);
     let report = bench::bench_dir(dir, &cfg, &progress)?;
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
+    bars.finish();
     if let Some(path) = markdown {
         atomic_write(path, report.markdown().as_bytes())?;
     }

@@ -75,12 +75,13 @@ impl TruthPart {
     /// World-frame bounds of every primitive and mesh of the part; `None` without geometry.
     #[must_use]
     pub fn aabb(&self) -> Option<(Vec3, Vec3)> {
-        self.shapes
-            .iter()
-            .map(Primitive::aabb)
-            .chain(self.meshes.iter().filter_map(TruthMesh::aabb))
-            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+        bounds(&self.shapes, self.meshes.iter())
     }
+}
+
+/// World-frame bounds of primitives and meshes together; `None` without geometry.
+pub fn bounds<'a>(primitives: &[Primitive], meshes: impl Iterator<Item = &'a TruthMesh>) -> Option<(Vec3, Vec3)> {
+    primitives.iter().map(Primitive::aabb).chain(meshes.filter_map(TruthMesh::aabb)).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
 }
 
 impl TruthObject {

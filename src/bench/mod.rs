@@ -12,7 +12,7 @@ use std::path::PathBuf;
 use thiserror::Error;
 
 pub use manifest::{AssetEntry, find_assets, manifest_entry_for};
-pub use run::{BenchConfig, BenchReport, ObjectResult, SettingResult, bench_asset, bench_dir, scan_asset};
+pub use run::{BenchConfig, BenchReport, ObjectResult, SettingResult, bench_asset, bench_dir, load_asset_truth, scan_asset, scan_truth};
 pub use truth::{AssetTruth, AssetTruthOptions, UpAxis, asset_truth, coarse_label};
 
 /// Why a benchmark step failed.

@@ -11,7 +11,8 @@ use serde::{Deserialize, Serialize};
 use super::BenchError;
 use super::manifest::{AssetEntry, find_assets};
 use super::truth::{AssetTruth, AssetTruthOptions, asset_truth, category_from_file_name};
-use crate::eval::{BaselineMetrics, Metrics, evaluate, evaluate_baseline};
+use crate::eval::geometry::mean;
+use crate::eval::{BaselineMetrics, Metrics, evaluate, evaluate_baseline, median};
 use crate::pipeline::{PinnedEdits, PipelineConfig, Quiet, reconstruct};
 use crate::report::Warning;
 use crate::scan::Scan;
@@ -40,15 +41,28 @@ impl Default for BenchConfig {
     }
 }
 
-/// Loads an asset, converts it to ground truth and scans it.
-pub fn scan_asset(entry: &AssetEntry, cfg: &ScannerConfig, seed: u64) -> Result<(AssetTruth, Scan, Vec<Warning>), BenchError> {
+/// Loads an asset and converts it to ground truth, with the warnings of both steps.
+pub fn load_asset_truth(entry: &AssetEntry) -> Result<(AssetTruth, Vec<Warning>), BenchError> {
     let asset = crate::assets::load_asset(&entry.path)?;
     let category = entry.category.clone().unwrap_or_else(|| category_from_file_name(&entry.path));
     let truth = asset_truth(&asset, &AssetTruthOptions { category, up: entry.up })?;
-    let mut scan = crate::synth::scan(&truth.truth, cfg, seed);
-    scan.source = entry.path.display().to_string();
     let mut warnings = asset.warnings;
     warnings.extend(truth.warnings.iter().cloned());
+    Ok((truth, warnings))
+}
+
+/// Scans an asset's ground truth with the given settings.
+#[must_use]
+pub fn scan_truth(entry: &AssetEntry, truth: &AssetTruth, cfg: &ScannerConfig, seed: u64) -> Scan {
+    let mut scan = crate::synth::scan(&truth.truth, cfg, seed);
+    scan.source = entry.path.display().to_string();
+    scan
+}
+
+/// Loads an asset, converts it to ground truth and scans it.
+pub fn scan_asset(entry: &AssetEntry, cfg: &ScannerConfig, seed: u64) -> Result<(AssetTruth, Scan, Vec<Warning>), BenchError> {
+    let (truth, warnings) = load_asset_truth(entry)?;
+    let scan = scan_truth(entry, &truth, cfg, seed);
     Ok((truth, scan, warnings))
 }
 
@@ -80,23 +94,24 @@ pub struct ObjectResult {
 
 /// Scans, reconstructs and scores one asset with both settings.
 pub fn bench_asset(entry: &AssetEntry, cfg: &BenchConfig) -> Result<ObjectResult, BenchError> {
-    let run = |scanner: &ScannerConfig| -> Result<(AssetTruth, SettingResult, Vec<Warning>), BenchError> {
+    // The asset is read and converted once; each setting scans the same truth.
+    let (truth, warnings) = load_asset_truth(entry)?;
+    let run = |scanner: &ScannerConfig| -> SettingResult {
         let start = Instant::now();
-        let (truth, scan, warnings) = scan_asset(entry, scanner, cfg.seed)?;
+        let scan = scan_truth(entry, &truth, scanner, cfg.seed);
         let model = reconstruct(&scan, &cfg.pipeline, &PinnedEdits::default(), &Quiet);
         let metrics = evaluate(&model, &truth.truth);
         let baseline = evaluate_baseline(&scan, &truth.truth);
-        let result = SettingResult {
+        SettingResult {
             scan_points: scan.point_count(),
             scanned_parts: scan.parts.len(),
             metrics,
             baseline,
             seconds: start.elapsed().as_secs_f64(),
-        };
-        Ok((truth, result, warnings))
+        }
     };
-    let (truth, partial, warnings) = run(&cfg.partial)?;
-    let (_, clean, _) = run(&cfg.clean)?;
+    let partial = run(&cfg.partial);
+    let clean = run(&cfg.clean);
     let object = &truth.truth.objects[0];
     Ok(ObjectResult {
         name: entry.name.clone(),
@@ -132,18 +147,6 @@ pub struct Totals {
     pub median_hinge_distance_m: Option<f32>,
 }
 
-fn mean(values: impl Iterator<Item = f32>) -> Option<f32> {
-    let (s, n) = values.filter(|v| v.is_finite()).fold((0.0_f64, 0_usize), |(s, n), v| (s + f64::from(v), n + 1));
-    (n > 0).then(|| (s / n as f64) as f32)
-}
-
-fn median(mut values: Vec<f32>) -> Option<f32> {
-    values.retain(|v| v.is_finite());
-    values.sort_by(f32::total_cmp);
-    let n = values.len();
-    (n > 0).then(|| if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) })
-}
-
 impl Totals {
     /// Totals of one setting (`clean` picks the clean complete scans) over objects.
     #[must_use]
@@ -163,8 +166,8 @@ impl Totals {
             movable_joints,
             movable_correct,
             movable_type_accuracy: (movable_joints > 0).then(|| movable_correct as f32 / movable_joints as f32),
-            median_axis_error_deg: median(joints.clone().filter_map(|j| j.axis_error_deg).collect()),
-            median_hinge_distance_m: median(joints.filter_map(|j| j.hinge_distance_m).collect()),
+            median_axis_error_deg: median(&joints.clone().filter_map(|j| j.axis_error_deg).collect::<Vec<_>>()),
+            median_hinge_distance_m: median(&joints.filter_map(|j| j.hinge_distance_m).collect::<Vec<_>>()),
         }
     }
 }

@@ -104,11 +104,7 @@ impl<'a> Solids<'a> {
     }
 
     fn aabb(&self) -> Option<(Vec3, Vec3)> {
-        self.primitives
-            .iter()
-            .map(Primitive::aabb)
-            .chain(self.meshes.iter().filter_map(|m| m.aabb()))
-            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+        crate::truth::bounds(&self.primitives, self.meshes.iter().copied())
     }
 
     /// About `n_total` surface samples split by surface area over primitives and meshes
