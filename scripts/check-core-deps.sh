@@ -2,7 +2,7 @@
 # The core (built with --no-default-features) must not depend on GUI or viewer crates.
 # Like rerun's forbidden-dependency check: fail loudly, naming the crate and the path to it.
 set -euo pipefail
-forbidden='^(egui|eframe|egui-wgpu|egui_kittest|wgpu|winit|rerun|re_[a-z_]+)$'
+forbidden='^(egui|eframe|egui-wgpu|egui_kittest|egui_plot|egui-winit|wgpu|wgpu-core|winit|rfd|rerun|re_[a-z_]+)$'
 tree=$(cargo tree --no-default-features -e normal --prefix none --format '{p}' 2>/dev/null | awk '{print $1}' | sort -u)
 bad=$(echo "$tree" | grep -E "$forbidden" || true)
 if [ -n "$bad" ]; then

@@ -23,7 +23,7 @@ pub struct IoError {
 }
 
 impl IoError {
-    fn new(path: &Path, action: &'static str, source: std::io::Error) -> Self {
+    pub fn new(path: &Path, action: &'static str, source: std::io::Error) -> Self {
         Self { path: path.to_path_buf(), action, source }
     }
 }

@@ -4,9 +4,12 @@
 //! Data flows one way: scan → parts → primitives → contact graph → tree → joints → refined
 //! scene → exports. See `ARCHITECTURE.md` for the module map and invariants.
 
+#[cfg(feature = "gui")]
+pub mod app;
 pub mod assets;
 pub mod bench;
 pub mod contact;
+pub mod edit;
 pub mod eval;
 pub mod export;
 pub mod fit;
@@ -18,6 +21,8 @@ pub mod pipeline;
 pub mod polygon;
 pub mod primitive;
 pub mod refine;
+#[cfg(feature = "gui")]
+pub mod render;
 pub mod report;
 pub mod scan;
 pub mod scene;

@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use partscene::bench;
 use partscene::eval::{self, Metrics};
-use partscene::export::{UrdfConfig, read_scene_json, scene_json, scene_urdf};
+use partscene::export::{UrdfConfig, read_scene_json, write_scene_files};
 use partscene::io::atomic_write;
 use partscene::model::SceneModel;
 use partscene::pipeline::{PinnedEdits, PipelineConfig, Progress, reconstruct};
@@ -31,13 +31,50 @@ struct Cli {
     /// θc: minimum contact ratio.
     #[arg(long, global = true, value_name = "RATIO")]
     contact_min: Option<f32>,
-    /// Without a command: the demo on the built-in room (seed 0), written to `out/demo`.
+    /// Without a command: the viewer-editor on the demo room (with the `gui` feature), else the
+    /// demo on the built-in room (seed 0), written to `out/demo`.
     #[command(subcommand)]
     command: Option<Command>,
 }
 
 #[derive(Subcommand, Clone)]
 enum Command {
+    /// Open the viewer-editor on a scan (.ply), a saved session (.json) or the demo room.
+    #[cfg(feature = "gui")]
+    View {
+        /// A part-segmented scan (.ply) or a saved session (.json); the demo room when absent.
+        input: Option<PathBuf>,
+        /// Demo room seed (without INPUT).
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Demo room with the clean complete scan.
+        #[arg(long)]
+        clean: bool,
+        /// Do not autosave edits for crash recovery.
+        #[arg(long)]
+        no_autosave: bool,
+    },
+    /// Render a scene to a PNG without a window (wgpu; lavapipe where there is no GPU).
+    #[cfg(feature = "gui")]
+    Render {
+        /// scene.json, a session (.json), a scan (.ply, reconstructed first) or `demo`.
+        scene: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Viewpoint.
+        #[arg(long, default_value = "iso", value_parser = ["iso", "front", "side", "top"])]
+        view: String,
+        #[arg(long, default_value_t = 1280)]
+        width: u32,
+        #[arg(long, default_value_t = 800)]
+        height: u32,
+        /// Colour scan points by fit error instead of by part.
+        #[arg(long)]
+        fit_error: bool,
+        /// Open every movable joint to this fraction of its range (0 = rest, 1 = fully open).
+        #[arg(long, default_value_t = 0.0, value_name = "F")]
+        open: f32,
+    },
     /// Generate the built-in demo room, scan it virtually, reconstruct and evaluate it.
     Demo {
         /// Room seed (0 is the default demo).
@@ -174,8 +211,18 @@ fn config(cli: &Cli) -> Result<PipelineConfig> {
 fn main() -> Result<()> {
     let cli = Cli::parse();
     let cfg = config(&cli)?;
-    let command = cli.command.clone().unwrap_or(Command::Demo { seed: 0, count: 1, clean: false, out: Some(PathBuf::from("out/demo")) });
+    #[cfg(feature = "gui")]
+    let default = Command::View { input: None, seed: 0, clean: false, no_autosave: false };
+    #[cfg(not(feature = "gui"))]
+    let default = Command::Demo { seed: 0, count: 1, clean: false, out: Some(PathBuf::from("out/demo")) };
+    let command = cli.command.clone().unwrap_or(default);
     match command {
+        #[cfg(feature = "gui")]
+        Command::View { input, seed, clean, no_autosave } => view_cmd(input, seed, clean, no_autosave, cfg),
+        #[cfg(feature = "gui")]
+        Command::Render { scene, out, view, width, height, fit_error, open } => {
+            render_cmd(&scene, &out, &view, [width, height], fit_error, open, &cfg, cli.json)
+        }
         Command::Demo { seed, count, clean, out } => demo(seed, count, clean, out.as_deref(), &cfg, cli.json),
         Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, &cfg, cli.json),
         Command::Eval { scene, truth, scan } => eval_cmd(&scene, &truth, scan.as_deref(), cli.json),
@@ -211,10 +258,7 @@ fn main() -> Result<()> {
 }
 
 fn write_outputs(dir: &Path, scene: &SceneModel) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let urdf = scene_urdf(scene, &UrdfConfig::default())?;
-    atomic_write(&dir.join("scene.urdf"), urdf.as_bytes())?;
-    atomic_write(&dir.join("scene.json"), scene_json(scene).as_bytes())?;
+    write_scene_files(dir, scene, &UrdfConfig::default())?;
     Ok(())
 }
 
@@ -416,6 +460,56 @@ fn bench_cmd(dir: &Path, markdown: Option<&Path>, seed: u64, pipeline: &Pipeline
         if let Some(path) = markdown {
             println!("wrote {}", path.display());
         }
+    }
+    Ok(())
+}
+
+#[cfg(feature = "gui")]
+fn view_cmd(input: Option<PathBuf>, seed: u64, clean: bool, no_autosave: bool, config: PipelineConfig) -> Result<()> {
+    use partscene::app::{LaunchOptions, run};
+    use partscene::edit::SceneSource;
+    let mut launch = LaunchOptions { config, ..LaunchOptions::default() };
+    if no_autosave {
+        launch.autosave = None;
+    }
+    match input {
+        Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) => launch.session = Some(p),
+        Some(path) => launch.source = Some(SceneSource::Scan { path }),
+        None => launch.source = Some(SceneSource::Demo { seed, clean }),
+    }
+    run(launch).map_err(|e| anyhow::anyhow!("cannot open the editor window: {e}"))
+}
+
+#[cfg(feature = "gui")]
+fn render_cmd(
+    scene: &Path,
+    out: &Path,
+    view: &str,
+    size_px: [u32; 2],
+    fit_error: bool,
+    open: f32,
+    cfg: &PipelineConfig,
+    json: bool,
+) -> Result<()> {
+    use partscene::render::{PointColors, ShotOptions, ViewPreset, render_file, save_png};
+    anyhow::ensure!(size_px[0] > 0 && size_px[1] > 0, "--width and --height must be at least 1");
+    anyhow::ensure!((0.0..=1.0).contains(&open), "--open must be a fraction in [0, 1], got {open}");
+    let mut options = ShotOptions { size_px, ..ShotOptions::default() };
+    options.view = ViewPreset::from_name(view).with_context(|| format!("unknown --view {view:?}"))?;
+    if fit_error {
+        options.draw.point_colors = PointColors::ByFitError;
+    }
+    options.open_fraction = open;
+    let t = Instant::now();
+    let (image, adapter) = render_file(scene, &options, cfg)?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    save_png(&image, out)?;
+    if json {
+        println!("{}", serde_json::json!({"out": out, "width": image.width(), "height": image.height(), "adapter": adapter}));
+    } else {
+        println!("rendered {} ({}×{}) on {adapter} in {:.2} s", out.display(), image.width(), image.height(), t.elapsed().as_secs_f64());
     }
     Ok(())
 }

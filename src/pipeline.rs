@@ -21,7 +21,7 @@ use crate::model::{ContactEdge, ObjectModel, PartModel, SceneModel};
 use crate::primitive::{Primitive, PrimitiveKind};
 use crate::refine::{RefineConfig, RefineStats, refine_object};
 use crate::report::Warning;
-use crate::scan::{ObjectId, PartId, Scan};
+use crate::scan::{ObjectId, PartId, Scan, ScanPart};
 use crate::scene::{SceneConfig, SceneObject, build_scene, estimate_floor};
 use crate::tree::{PartTree, TreeConfig, TreePart, build_part_tree, root_preference};
 
@@ -79,21 +79,9 @@ pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &d
         .parts
         .par_iter()
         .map(|part| {
-            let forced = edits.primitive_kind.get(&part.id).copied();
-            let r = fit_part(&part.points, cfg, forced)
-                .map(|fit| if forced.is_none() { prefer_box_for_boards(&part.label, &part.points, fit) } else { fit });
+            let r = fit_one_part(part, cfg, edits.primitive_kind.get(&part.id).copied());
             progress.update("fit", done.fetch_add(1, Ordering::Relaxed) + 1, total);
-            match r {
-                Ok(fit) => Ok(PartModel {
-                    id: part.id,
-                    object: part.object,
-                    label: part.label.clone(),
-                    primitive: fit.primitive,
-                    fit_error: fit.fit_error,
-                    point_count: part.points.len(),
-                }),
-                Err(e) => Err((part.id, Warning::new("fit", format!("part {}", part.id), format!("{e}; part left out")))),
-            }
+            r.map_err(|w| (part.id, w))
         })
         .collect();
     let mut out = FittedParts::default();
@@ -108,6 +96,22 @@ pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &d
     }
     coalign_parts(scan, &mut out.parts, edits);
     out
+}
+
+/// Fits one part on its own: with `forced` the kind a person pinned, else the best kind under the
+/// label shape prior. (Co-alignment within the object is left to [`fit_parts`].)
+pub fn fit_one_part(part: &ScanPart, cfg: &FitConfig, forced: Option<PrimitiveKind>) -> Result<PartModel, Warning> {
+    let fit = fit_part(&part.points, cfg, forced)
+        .map(|fit| if forced.is_none() { prefer_box_for_boards(&part.label, &part.points, fit) } else { fit })
+        .map_err(|e| Warning::new("fit", format!("part {}", part.id), format!("{e}; part left out")))?;
+    Ok(PartModel {
+        id: part.id,
+        object: part.object,
+        label: part.label.clone(),
+        primitive: fit.primitive,
+        fit_error: fit.fit_error,
+        point_count: part.points.len(),
+    })
 }
 
 /// Co-alignment, a Manhattan prior within each object: a part whose box axes lie within 45° of

@@ -1,0 +1,141 @@
+//! The viewer-editor (egui/eframe on wgpu): see the scan, primitives, joints and contact graph;
+//! correct the tree, joints and primitives; watch refinement re-run; articulate; export.
+//! App state ([`state`]) is kept apart from the per-frame UI ([`panels`], [`view3d`]); the UI
+//! sends [`AppCommand`]s that the state applies after the frame. Feature `gui`.
+
+pub mod panels;
+pub mod state;
+pub mod view3d;
+
+use std::path::PathBuf;
+
+use eframe::egui;
+
+pub use panels::{PanelState, part_name};
+pub use state::{AppCommand, AppState, Autosave, Message};
+pub use view3d::ViewCache;
+
+use crate::edit::SceneSource;
+use crate::pipeline::{PinnedEdits, PipelineConfig};
+
+/// What the editor opens with.
+#[derive(Clone, Debug)]
+pub struct LaunchOptions {
+    /// A scan or the demo; `None` with no session opens the demo room.
+    pub source: Option<SceneSource>,
+    /// A saved session (takes precedence over `source`).
+    pub session: Option<PathBuf>,
+    /// Where edits are autosaved for crash recovery (`None`: no autosave).
+    pub autosave: Option<PathBuf>,
+    pub config: PipelineConfig,
+}
+
+impl Default for LaunchOptions {
+    fn default() -> Self {
+        Self { source: None, session: None, autosave: Autosave::default_path(), config: PipelineConfig::default() }
+    }
+}
+
+/// The eframe application.
+pub struct PartsceneApp {
+    pub state: AppState,
+    pub panels: PanelState,
+    cache: ViewCache,
+    has_gpu: bool,
+}
+
+impl PartsceneApp {
+    /// Creates the app and starts opening what `launch` names in the background.
+    #[must_use]
+    pub fn new(cc: &eframe::CreationContext<'_>, launch: LaunchOptions) -> Self {
+        let has_gpu = view3d::install_renderer(cc.wgpu_render_state.as_ref());
+        let mut state = AppState::new(launch.config.clone(), Autosave::at(launch.autosave.clone()));
+        match (&launch.session, launch.source) {
+            (Some(path), _) => state.apply(AppCommand::OpenSession(path.clone())),
+            (None, Some(source)) => state.open(source, PinnedEdits::default()),
+            (None, None) => state.open(SceneSource::Demo { seed: 0, clean: false }, PinnedEdits::default()),
+        }
+        Self { state, panels: PanelState::default(), cache: ViewCache::default(), has_gpu }
+    }
+
+    /// One frame of UI; returns the commands it produced, already applied.
+    pub fn frame_ui(&mut self, ui: &mut egui::Ui) -> Vec<AppCommand> {
+        if self.state.poll_job() {
+            ui.ctx().request_repaint();
+        }
+        if self.state.job.is_some() {
+            ui.ctx().request_repaint_after(std::time::Duration::from_millis(50));
+        }
+        let mut commands = Vec::new();
+        shortcuts(ui.ctx(), &mut commands);
+        dropped_files(ui.ctx(), &mut commands);
+        self.state.last_hovered = self.state.hovered.take();
+        let state = &mut self.state;
+        let panels = &mut self.panels;
+        egui::Panel::top("menu").show(ui, |ui| panels::menu_ui(ui, state, panels, &mut commands));
+        egui::Panel::bottom("status").show(ui, |ui| panels::status_ui(ui, state, &mut commands));
+        egui::Panel::left("scene tree").resizable(true).default_size(240.0).show(ui, |ui| {
+            ui.heading("Scene");
+            panels::tree_ui(ui, state, &mut commands);
+        });
+        egui::Panel::right("inspector").resizable(true).default_size(300.0).show(ui, |ui| {
+            ui.heading("Inspector");
+            panels::inspector_ui(ui, state, panels, &mut commands);
+            ui.separator();
+            panels::joints_ui(ui, state, &mut commands);
+        });
+        egui::Panel::bottom("graph")
+            .resizable(true)
+            .default_size(200.0)
+            .min_size(140.0)
+            .show(ui, |ui| panels::graph_ui(ui, state, &mut commands));
+        egui::CentralPanel::no_frame().show(ui, |ui| view3d::view3d_ui(ui, state, &mut self.cache, &mut commands, self.has_gpu));
+        panels::windows_ui(ui.ctx(), state, panels, &mut commands);
+        self.state.apply_all(commands.clone());
+        commands
+    }
+}
+
+fn shortcuts(ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
+    use egui::{Key, KeyboardShortcut, Modifiers};
+    let redo = KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+    let redo_y = KeyboardShortcut::new(Modifiers::COMMAND, Key::Y);
+    let undo = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z);
+    ctx.input_mut(|i| {
+        // The shift variant first: consume_shortcut ignores extra modifiers.
+        if i.consume_shortcut(&redo) || i.consume_shortcut(&redo_y) {
+            commands.push(AppCommand::Redo);
+        } else if i.consume_shortcut(&undo) {
+            commands.push(AppCommand::Undo);
+        }
+    });
+}
+
+fn dropped_files(ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
+    let dropped: Vec<PathBuf> =
+        ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect());
+    for path in dropped {
+        let is_session = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        commands.push(if is_session { AppCommand::OpenSession(path) } else { AppCommand::Open(SceneSource::Scan { path }) });
+    }
+}
+
+impl eframe::App for PartsceneApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.frame_ui(ui);
+    }
+
+    fn on_exit(&mut self) {
+        self.state.on_exit();
+    }
+}
+
+/// Opens the editor window.
+pub fn run(launch: LaunchOptions) -> Result<(), eframe::Error> {
+    let options = eframe::NativeOptions {
+        renderer: eframe::Renderer::Wgpu,
+        viewport: egui::ViewportBuilder::default().with_title("partscene").with_inner_size([1440.0, 900.0]).with_drag_and_drop(true),
+        ..Default::default()
+    };
+    eframe::run_native("partscene", options, Box::new(|cc| Ok(Box::new(PartsceneApp::new(cc, launch)))))
+}
