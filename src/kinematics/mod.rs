@@ -4,7 +4,7 @@ mod assign;
 mod joint;
 
 pub use assign::{
-    KinematicsConfig, estimate_joint, is_base_label, is_handle_label, is_movable_label, is_typical_parent, joint_kind_for_label,
-    label_tokens, outward_direction,
+    KinematicsConfig, estimate_joint, is_base_label, is_handle_label, is_movable_label, is_typical_parent, joint_from_handle,
+    joint_kind_for_label, label_tokens, outward_direction,
 };
 pub use joint::{Joint, JointKind};
