@@ -14,7 +14,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::fit::{FitConfig, fit_part};
 use crate::kinematics::{
-    Joint, JointKind, KinematicsConfig, estimate_joint, is_base_label, is_handle_label, joint_kind_for_label, label_tokens,
+    Joint, JointKind, KinematicsConfig, estimate_joint, is_base_label, is_handle_label, joint_from_handle, joint_kind_for_label,
+    label_tokens,
 };
 use crate::math::Vec3;
 use crate::model::{ContactEdge, ObjectModel, PartModel, SceneModel};
@@ -381,20 +382,32 @@ fn make_joint(
     edits: &PinnedEdits,
 ) -> Joint {
     let label = labels.get(&child).copied().unwrap_or("");
-    let kind = edits.joint_kind.get(&child).copied().unwrap_or_else(|| joint_kind_for_label(label));
+    let mut kind = edits.joint_kind.get(&child).copied().unwrap_or_else(|| joint_kind_for_label(label));
     // A handle mounted on the child tells the front and the side that opens.
-    let handle = tree
-        .children(child)
-        .into_iter()
-        .find(|c| labels.get(c).is_some_and(|l| is_handle_label(l) || label_tokens(l).any(|t| t == "knob")))
-        .and_then(|c| prims.get(&c))
-        .map(Primitive::center);
+    let handle_of = |words: &dyn Fn(&str) -> bool| {
+        tree.children(child)
+            .into_iter()
+            .find(|c| labels.get(c).is_some_and(|l| words(l)))
+            .and_then(|c| prims.get(&c))
+            .map(Primitive::center)
+    };
+    let handle = handle_of(&|l| is_handle_label(l) || label_tokens(l).any(|t| t == "knob"));
     let (Some(pp), Some(cp)) = (prims.get(&parent), prims.get(&child)) else {
         return Joint { parent, child, kind: JointKind::Fixed, axis_world: Vec3::X, origin_world: Vec3::ZERO, lower: 0.0, upper: 0.0 };
     };
     // The parent face the child is mounted on (same face index on the refined primitive).
-    let mount_normal =
+    let mut mount_normal =
         tree.contacts.get(&(parent, child)).and_then(|c| crate::contact::surface_planes(pp).get(c.parent_face).map(|f| f.normal));
+    // A part whose label names no joint but which carries a grip: its geometry picks the
+    // template (drawer or door) and its front.
+    if kind == JointKind::Fixed
+        && !edits.joint_kind.contains_key(&child)
+        && !is_handle_label(label)
+        && let Some((k, front)) = handle_of(&is_handle_label).and_then(|h| joint_from_handle(pp, cp, h))
+    {
+        kind = k;
+        mount_normal = Some(front);
+    }
     let mut joint = estimate_joint(parent, pp, child, cp, label, kind, handle, mount_normal, &cfg.kinematics);
     if let Some(axis) = edits.axis.get(&child) {
         joint.axis_world = axis.normalize_or(joint.axis_world);

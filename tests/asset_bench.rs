@@ -122,6 +122,28 @@ fn one_shared_object_runs_end_to_end() {
     assert!(md.contains("Refrigerator") && md.contains("| **all** (1) | clean |"), "{md}");
 }
 
+#[test]
+fn drawers_named_by_position_with_handles_slide() {
+    // LIBERO's wooden cabinet: drawer bodies `cabinet_top/middle/bottom` hold their handles; the
+    // handles become parts of their own, and the drawers (labels "top", "part") slide out of the
+    // front by their geometry on the clean complete scan.
+    let Some(objects) = shared_objects() else {
+        skip_loudly("drawers_named_by_position_with_handles_slide");
+        return;
+    };
+    let entries = find_assets(&objects).expect("manifest");
+    let entry = entries.iter().find(|e| e.name.ends_with("wooden_cabinet")).expect("wooden_cabinet row");
+    let r = partscene::bench::bench_asset(entry, &BenchConfig::default()).expect("bench");
+    let handles = r.part_labels.values().filter(|(label, _)| label == "handle").count();
+    assert_eq!((r.parts, handles, r.movable_joints), (7, 3, 3), "{:?}", r.part_labels);
+    let row = &r.clean.metrics.objects[0];
+    assert_eq!(row.movable_correct_types, 3, "{:?}", row.joints);
+    for j in row.joints.iter().filter(|j| j.truth_kind.is_movable()) {
+        assert!(j.axis_error_deg.expect("axis") < 5.0, "{j:?}");
+        assert!(j.prismatic_origin_distance_m.expect("origin") < 0.02, "{j:?}");
+    }
+}
+
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).expect("mkdir");
     for e in std::fs::read_dir(from).expect("read dir").flatten() {

@@ -214,6 +214,9 @@ fn mjcf_degrees_radians_slide_nesting_include_and_classes() {
     assert_eq!(vertices.len(), 8);
     let (lo, hi) = geoms[4].aabb().unwrap();
     assert!(close(hi - lo, Vec3::splat(0.1), 1e-5), "{lo:?} {hi:?}");
+    // Names the file gives a geom (mesh name here) are kept for semantic words; unnamed: none.
+    assert_eq!(geoms[4].names, ["cube"]);
+    assert!(geoms[0].names.is_empty());
     // The world plane is reported and skipped.
     assert!(asset.warnings.iter().any(|w| w.message.contains("plane")), "{:?}", asset.warnings);
 }

@@ -577,7 +577,8 @@ impl Reader {
                 return Ok(None);
             }
         };
-        Ok(Some(geom))
+        let names = ["name", "mesh", "material"].into_iter().filter_map(|a| text(attrs, a));
+        Ok(Some(geom.named(names)))
     }
 
     /// `pos` and the orientation (`quat`, `axisangle`, `euler`, `xyaxes`, `zaxis`) of an element.

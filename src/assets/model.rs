@@ -48,6 +48,10 @@ pub struct AssetGeom {
     pub world_from_geom: Pose,
     pub shape: GeomShape,
     pub role: GeomRole,
+    /// Names the file gives the geom, as written: its own name, its mesh's name (MJCF) or mesh
+    /// file stem (URDF), its material's name. Empty when the file names nothing. Read for
+    /// semantic words (a mesh called `…_handle_vis` is a handle), never for joint types.
+    pub names: Vec<String>,
 }
 
 /// The shape of a geom, already placed in the model root frame.
@@ -141,14 +145,21 @@ impl AssetGeom {
     /// A primitive geom placed at `world_from_geom` with full extents `size` (see [`Primitive`]).
     #[must_use]
     pub fn primitive(kind: PrimitiveKind, size: Vec3, world_from_geom: Pose, role: GeomRole) -> Self {
-        Self { world_from_geom, shape: GeomShape::Primitive(Primitive::new(kind, size, world_from_geom)), role }
+        Self { world_from_geom, shape: GeomShape::Primitive(Primitive::new(kind, size, world_from_geom)), role, names: Vec::new() }
     }
 
     /// A mesh geom: `vertices_geom` (scale applied) are moved into the model root frame.
     #[must_use]
     pub fn mesh(vertices_geom: &[Vec3], triangles: Vec<[u32; 3]>, world_from_geom: Pose, role: GeomRole) -> Self {
         let vertices = vertices_geom.iter().map(|&v| world_from_geom.transform_point(v)).collect();
-        Self { world_from_geom, shape: GeomShape::Mesh { vertices, triangles }, role }
+        Self { world_from_geom, shape: GeomShape::Mesh { vertices, triangles }, role, names: Vec::new() }
+    }
+
+    /// The geom with the names its file gives it (empty names are dropped).
+    #[must_use]
+    pub fn named<S: AsRef<str>>(mut self, names: impl IntoIterator<Item = S>) -> Self {
+        self.names.extend(names.into_iter().map(|n| n.as_ref().trim().to_owned()).filter(|n| !n.is_empty()));
+        self
     }
 
     /// Axis-aligned bounds in the model root frame.

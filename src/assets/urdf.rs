@@ -151,12 +151,16 @@ pub fn parse_urdf(text: &str, path: &Path, base_dir: &Path, fallback_name: &str)
         let parts = link
             .visual
             .iter()
-            .map(|v| (GeomRole::Visual, &v.origin, &v.geometry))
-            .chain(link.collision.iter().map(|c| (GeomRole::Collision, &c.origin, &c.geometry)));
-        for (role, origin, geometry) in parts {
+            .map(|v| (GeomRole::Visual, &v.origin, &v.geometry, v.name.as_deref(), v.material.as_ref().map(|m| m.name.as_str())))
+            .chain(link.collision.iter().map(|c| (GeomRole::Collision, &c.origin, &c.geometry, c.name.as_deref(), None)));
+        for (role, origin, geometry, name, material) in parts {
             let world_from_geom = world_from_link * pose_of(origin);
+            let mesh_stem = match geometry {
+                urdf_rs::Geometry::Mesh { filename, .. } => Path::new(filename).file_stem().and_then(|s| s.to_str()),
+                _ => None,
+            };
             match geometry_to_geom(geometry, world_from_geom, role, base_dir, &mut meshes) {
-                Ok(geom) => geoms.push(geom),
+                Ok(geom) => geoms.push(geom.named([name, mesh_stem, material].into_iter().flatten())),
                 Err(message) => asset.warnings.push(Warning::new("assets", format!("link {}", link.name), message)),
             }
         }

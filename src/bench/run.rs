@@ -145,6 +145,9 @@ pub struct Totals {
     pub movable_type_accuracy: Option<f32>,
     pub median_axis_error_deg: Option<f32>,
     pub median_hinge_distance_m: Option<f32>,
+    /// Median prismatic origin distance ([`crate::eval::kinematics::prismatic_origin_distance`]).
+    #[serde(default)]
+    pub median_prismatic_origin_distance_m: Option<f32>,
 }
 
 impl Totals {
@@ -167,7 +170,8 @@ impl Totals {
             movable_correct,
             movable_type_accuracy: (movable_joints > 0).then(|| movable_correct as f32 / movable_joints as f32),
             median_axis_error_deg: median(&joints.clone().filter_map(|j| j.axis_error_deg).collect::<Vec<_>>()),
-            median_hinge_distance_m: median(&joints.filter_map(|j| j.hinge_distance_m).collect::<Vec<_>>()),
+            median_hinge_distance_m: median(&joints.clone().filter_map(|j| j.hinge_distance_m).collect::<Vec<_>>()),
+            median_prismatic_origin_distance_m: median(&joints.filter_map(|j| j.prismatic_origin_distance_m).collect::<Vec<_>>()),
         }
     }
 }
@@ -216,7 +220,7 @@ fn num(v: Option<f32>, digits: usize) -> String {
 
 fn row_cells(t: &Totals) -> String {
     format!(
-        "{} vs {} | {} vs {} | {} | {}/{} | {} | {}",
+        "{} vs {} | {} vs {} | {} | {}/{} | {} | {} | {}",
         num(t.part_chamfer, 3),
         num(t.object_chamfer, 3),
         num(t.part_iou, 3),
@@ -226,10 +230,11 @@ fn row_cells(t: &Totals) -> String {
         t.movable_joints,
         num(t.median_axis_error_deg, 1),
         num(t.median_hinge_distance_m.map(|m| m * 100.0), 1),
+        num(t.median_prismatic_origin_distance_m.map(|m| m * 100.0), 1),
     )
 }
 
-const HEADER: &str = "| {} | setting | Chamfer ↓ part vs object | IoU ↑ part vs object | edge mAP | movable types | axis err ° (median) | hinge cm (median) |\n| --- | --- | --- | --- | ---: | ---: | ---: | ---: |\n";
+const HEADER: &str = "| {} | setting | Chamfer ↓ part vs object | IoU ↑ part vs object | edge mAP | movable types | axis err ° (median) | hinge cm (median) | prismatic origin cm (median) |\n| --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: |\n";
 
 impl BenchReport {
     /// The tables as markdown: per object, per category, all.

@@ -4,8 +4,8 @@
 
 use std::collections::BTreeMap;
 
-use crate::assets::{ArticulatedAsset, AssetJoint, GeomShape};
-use crate::kinematics::{Joint, JointKind};
+use crate::assets::{ArticulatedAsset, AssetGeom, AssetJoint, AssetLink, GeomShape};
+use crate::kinematics::{Joint, JointKind, is_handle_label};
 use crate::math::{Pose, Quat, Vec3};
 use crate::primitive::Primitive;
 use crate::report::Warning;
@@ -100,11 +100,62 @@ pub fn category_from_file_name(path: &std::path::Path) -> String {
     if stem.is_empty() { "object".into() } else { stem.to_owned() }
 }
 
-/// A link with geometry, before placement.
+/// A link with geometry (or a grip split off one), before placement.
 struct Raw<'a> {
     link: &'a str,
     shapes: Vec<Primitive>,
     meshes: Vec<TruthMesh>,
+    /// A grip split off the link before it in `raws` ([`split_grip`]): labelled `handle`, fixed
+    /// to that link's part.
+    grip: bool,
+}
+
+/// Bounds are widened by this much (metres) when asking whether a geom lies inside a grip's
+/// named geometry: collision boxes approximate a visual mesh and poke out of it by millimetres.
+const GRIP_MARGIN_M: f32 = 0.003;
+
+/// Splits the geometry of a link into (rest, grip) when the file names part of it as a grip:
+/// geoms whose names ([`crate::assets::AssetGeom::names`]: geom, mesh, material) carry a handle
+/// word (handle, pull, grip, bar), and the link's preferred geoms that lie inside such a geom's
+/// bounds (collision boxes approximating a visual handle mesh). A part-segmented scan segments a
+/// handle as its own semantic part, whichever body the asset author put it in (LIBERO's
+/// `wooden_cabinet_top_handle_vis` mesh lives in the drawer body `cabinet_top`). Links that are
+/// grips themselves, and links whose geometry would be all grip, are not split (`None`).
+fn split_grip<'g>(link: &'g AssetLink, preferred: &[&'g AssetGeom]) -> Option<(Vec<&'g AssetGeom>, Vec<&'g AssetGeom>)> {
+    if is_handle_label(&coarse_label(&link.name, None, false)) {
+        return None;
+    }
+    let named_grip = |g: &AssetGeom| g.names.iter().any(|n| is_handle_label(n));
+    let regions: Vec<(Vec3, Vec3)> = link
+        .geoms
+        .iter()
+        .filter(|g| named_grip(g))
+        .filter_map(AssetGeom::aabb)
+        .map(|(lo, hi)| (lo - Vec3::splat(GRIP_MARGIN_M), hi + Vec3::splat(GRIP_MARGIN_M)))
+        .collect();
+    if regions.is_empty() {
+        return None;
+    }
+    let inside =
+        |g: &AssetGeom| g.aabb().is_some_and(|(lo, hi)| regions.iter().any(|(rlo, rhi)| lo.cmpge(*rlo).all() && hi.cmple(*rhi).all()));
+    let (grip, rest): (Vec<&AssetGeom>, Vec<&AssetGeom>) = preferred.iter().partition(|g| named_grip(g) || inside(g));
+    (!grip.is_empty() && !rest.is_empty()).then_some((rest, grip))
+}
+
+/// Primitives and meshes of geoms.
+fn solids_of(geoms: &[&AssetGeom]) -> (Vec<Primitive>, Vec<TruthMesh>) {
+    let mut shapes = Vec::new();
+    let mut meshes = Vec::new();
+    for g in geoms {
+        match &g.shape {
+            GeomShape::Primitive(p) => shapes.push(*p),
+            GeomShape::Mesh { vertices, triangles } if !triangles.is_empty() => {
+                meshes.push(TruthMesh { vertices: vertices.clone(), triangles: triangles.clone() });
+            }
+            GeomShape::Mesh { .. } => {}
+        }
+    }
+    (shapes, meshes)
 }
 
 /// Converts an asset at rest into ground truth (object id 1, part ids 1.. in link order).
@@ -112,7 +163,9 @@ struct Raw<'a> {
 /// Links without geometry are merged into their nearest ancestor with geometry; a part's joint is
 /// the movable joint on the chain up to its parent part (the one nearest the part when the chain
 /// has several, with a warning), else fixed. Parts with no ancestor part hang off the largest of
-/// them. The asset is rotated so `up` becomes +z and moved so it stands centred on z = 0.
+/// them. Geometry the file names as a grip inside a link that is not itself a grip becomes its
+/// own `handle` part, fixed to the link's part ([`split_grip`]). The asset is rotated so `up`
+/// becomes +z and moved so it stands centred on z = 0.
 pub fn asset_truth(asset: &ArticulatedAsset, options: &AssetTruthOptions) -> Result<AssetTruth, BenchError> {
     let mut warnings = Vec::new();
     let rotation = match options.up {
@@ -123,19 +176,14 @@ pub fn asset_truth(asset: &ArticulatedAsset, options: &AssetTruthOptions) -> Res
     let mut raws: Vec<Raw> = Vec::new();
     for link in &asset.links {
         let geoms = link.preferred_geoms();
-        let mut shapes = Vec::new();
-        let mut meshes = Vec::new();
-        for g in geoms {
-            match &g.shape {
-                GeomShape::Primitive(p) => shapes.push(*p),
-                GeomShape::Mesh { vertices, triangles } if !triangles.is_empty() => {
-                    meshes.push(TruthMesh { vertices: vertices.clone(), triangles: triangles.clone() });
-                }
-                GeomShape::Mesh { .. } => {}
-            }
-        }
+        let (rest, grip) = split_grip(link, &geoms).unwrap_or((geoms, Vec::new()));
+        let (shapes, meshes) = solids_of(&rest);
         if !shapes.is_empty() || !meshes.is_empty() {
-            raws.push(Raw { link: &link.name, shapes, meshes });
+            raws.push(Raw { link: &link.name, shapes, meshes, grip: false });
+            let (shapes, meshes) = solids_of(&grip);
+            if !shapes.is_empty() || !meshes.is_empty() {
+                raws.push(Raw { link: &link.name, shapes, meshes, grip: true });
+            }
         }
     }
     if raws.is_empty() {
@@ -159,7 +207,8 @@ pub fn asset_truth(asset: &ArticulatedAsset, options: &AssetTruthOptions) -> Res
     let shift = Vec3::new(-0.5 * (lo.x + hi.x), -0.5 * (lo.y + hi.y), -lo.z);
     let world_from_asset = Pose::from_parts(shift, rotation);
 
-    let part_of: BTreeMap<&str, PartId> = raws.iter().enumerate().map(|(i, r)| (r.link, i as PartId + 1)).collect();
+    let part_of: BTreeMap<&str, PartId> =
+        raws.iter().enumerate().filter(|(_, r)| !r.grip).map(|(i, r)| (r.link, i as PartId + 1)).collect();
     let parent_joint: BTreeMap<&str, &AssetJoint> = asset.joints.iter().map(|j| (j.child.as_str(), j)).collect();
     // Walk up from each part to its nearest ancestor part, collecting the joints on the way.
     let chain_of = |link: &str| -> (Option<PartId>, Vec<&AssetJoint>) {
@@ -179,7 +228,9 @@ pub fn asset_truth(asset: &ArticulatedAsset, options: &AssetTruthOptions) -> Res
         let bounds = r.shapes.iter().map(Primitive::aabb).chain(r.meshes.iter().filter_map(TruthMesh::aabb));
         bounds.reduce(|(a, b), (c, d)| (a.min(c), b.max(d))).map_or(0.0, |(a, b)| (b - a).max(Vec3::ZERO).element_product())
     };
-    let chains: Vec<(Option<PartId>, Vec<&AssetJoint>)> = raws.iter().map(|r| chain_of(r.link)).collect();
+    // A grip hangs off its link's part with no joint in between.
+    let chains: Vec<(Option<PartId>, Vec<&AssetJoint>)> =
+        raws.iter().map(|r| if r.grip { (part_of.get(r.link).copied(), Vec::new()) } else { chain_of(r.link) }).collect();
     let main_root = raws
         .iter()
         .zip(&chains)
@@ -195,7 +246,7 @@ pub fn asset_truth(asset: &ArticulatedAsset, options: &AssetTruthOptions) -> Res
         let id = i as PartId + 1;
         let is_root = id == main_root;
         let joint_name = chain.first().map(|j| j.name.as_str());
-        let label = coarse_label(raw.link, joint_name, is_root);
+        let label = if raw.grip { "handle".to_owned() } else { coarse_label(raw.link, joint_name, is_root) };
         let shapes = raw.shapes.iter().map(|s| Primitive::new(s.kind, s.size, world_from_asset * s.world_from_primitive)).collect();
         let meshes = raw
             .meshes
@@ -206,7 +257,7 @@ pub fn asset_truth(asset: &ArticulatedAsset, options: &AssetTruthOptions) -> Res
             })
             .collect();
         parts.push(TruthPart { id, label, shapes, meshes });
-        part_links.insert(id, raw.link.to_owned());
+        part_links.insert(id, if raw.grip { format!("{} (handle geoms)", raw.link) } else { raw.link.to_owned() });
         if is_root {
             continue;
         }
@@ -337,6 +388,42 @@ mod tests {
         assert!(j.upper.is_finite());
         assert_eq!(o.contact_edges, vec![[1, 2]]);
         assert!(o.parts[1].shapes[0].center().z > 0.9);
+    }
+
+    #[test]
+    fn handle_geoms_inside_a_drawer_body_become_a_handle_part() {
+        // LIBERO's wooden cabinet: the drawer body `cabinet_top` holds its box geoms and a handle
+        // (a visual mesh named `…_handle_vis`, material `…_handle`, approximated by unnamed
+        // collision boxes). The handle becomes its own part, fixed to the drawer; the drawer keeps
+        // its slide joint and its name-derived label.
+        let mut drawer = link("cabinet_top", &[(Vec3::new(0.0, -0.2, 0.5), Vec3::new(0.6, 0.02, 0.2))]);
+        let handle_boxes =
+            [(Vec3::new(0.0, -0.24, 0.5), Vec3::new(0.1, 0.01, 0.01)), (Vec3::new(0.04, -0.22, 0.5), Vec3::new(0.01, 0.03, 0.01))];
+        drawer.geoms.extend(link("x", &handle_boxes).geoms);
+        let mesh = [Vec3::new(-0.05, -0.245, 0.49), Vec3::new(0.05, -0.245, 0.49), Vec3::new(0.05, -0.205, 0.51)];
+        drawer.geoms.push(
+            AssetGeom::mesh(&mesh, vec![[0, 1, 2]], Pose::IDENTITY, GeomRole::Visual)
+                .named(["wooden_cabinet_top_handle_vis", "wooden_cabinet_top_handle"]),
+        );
+        let asset = ArticulatedAsset {
+            name: "wooden_cabinet".into(),
+            links: vec![link("base", &[(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.7, 0.4, 1.0))]), drawer],
+            joints: vec![joint("top_level", JointKind::Prismatic, "base", "cabinet_top", Vec3::Y, Vec3::ZERO)],
+            warnings: vec![],
+        };
+        let out = asset_truth(&asset, &AssetTruthOptions::default()).expect("truth");
+        let o = &out.truth.objects[0];
+        let labels: Vec<&str> = o.parts.iter().map(|p| p.label.as_str()).collect();
+        assert_eq!(labels, ["base", "top", "handle"]);
+        assert_eq!((o.parts[1].shapes.len(), o.parts[2].shapes.len()), (1, 2), "both handle boxes lie inside the handle mesh");
+        let kinds: Vec<(PartId, PartId, JointKind)> = o.joints.iter().map(|j| (j.parent, j.child, j.kind)).collect();
+        assert_eq!(kinds, [(1, 2, JointKind::Prismatic), (2, 3, JointKind::Fixed)]);
+        assert_eq!(out.part_links.get(&3).map(String::as_str), Some("cabinet_top (handle geoms)"));
+        // A link that is a handle itself is not split.
+        let mut grip = link("door_handle", &handle_boxes);
+        grip.geoms.push(AssetGeom::mesh(&mesh, vec![[0, 1, 2]], Pose::IDENTITY, GeomRole::Visual).named(["handle_vis"]));
+        let preferred = grip.preferred_geoms();
+        assert!(split_grip(&grip, &preferred).is_none());
     }
 
     #[test]

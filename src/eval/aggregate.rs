@@ -53,6 +53,9 @@ pub struct Aggregate {
     pub median_axis_error_deg: Option<f32>,
     pub max_axis_error_deg: Option<f32>,
     pub median_hinge_distance_m: Option<f32>,
+    /// Median prismatic origin distance over runs, metres.
+    #[serde(default)]
+    pub median_prismatic_origin_distance_m: Option<f32>,
     /// Mean over runs of each run's mAP.
     pub map: Option<f32>,
     pub min_run_map: Option<f32>,
@@ -69,6 +72,7 @@ pub fn aggregate<'a>(runs: impl Iterator<Item = (&'a Metrics, &'a BaselineMetric
     let mut a = Aggregate::default();
     let mut axes = Vec::new();
     let mut hinges = Vec::new();
+    let mut slides = Vec::new();
     let (mut maps, mut pc, mut oc, mut pi, mut oi) = (vec![], vec![], vec![], vec![], vec![]);
     for (m, b) in runs {
         a.runs += 1;
@@ -80,6 +84,7 @@ pub fn aggregate<'a>(runs: impl Iterator<Item = (&'a Metrics, &'a BaselineMetric
         for o in &m.objects {
             axes.extend(o.joints.iter().filter_map(|j| j.axis_error_deg));
             hinges.extend(o.joints.iter().filter_map(|j| j.hinge_distance_m));
+            slides.extend(o.joints.iter().filter_map(|j| j.prismatic_origin_distance_m));
         }
         maps.extend(s.map);
         pc.extend(s.mean_chamfer);
@@ -97,6 +102,7 @@ pub fn aggregate<'a>(runs: impl Iterator<Item = (&'a Metrics, &'a BaselineMetric
     a.max_axis_error_deg = axes.iter().copied().reduce(f32::max);
     a.median_axis_error_deg = median(&axes);
     a.median_hinge_distance_m = median(&hinges);
+    a.median_prismatic_origin_distance_m = median(&slides);
     a.min_run_map = maps.iter().copied().reduce(f32::min);
     a.map = mean(maps.into_iter());
     a.part_level_chamfer = mean(pc.into_iter());
@@ -122,11 +128,12 @@ impl fmt::Display for Aggregate {
         )?;
         writeln!(
             f,
-            "axis error: median {}°, max {}° over {} joints; hinge line distance median {} m",
+            "axis error: median {}°, max {}° over {} joints; hinge line distance median {} m; prismatic origin distance median {} m",
             show(self.median_axis_error_deg, 2),
             show(self.max_axis_error_deg, 2),
             self.axes_measured,
-            show(self.median_hinge_distance_m, 3)
+            show(self.median_hinge_distance_m, 3),
+            show(self.median_prismatic_origin_distance_m, 3)
         )?;
         writeln!(f, "kinematic-edge mAP: mean {} (lowest run {})", show(self.map, 3), show(self.min_run_map, 3))?;
         writeln!(

@@ -5,10 +5,10 @@ use std::collections::BTreeSet;
 use serde::{Deserialize, Serialize};
 
 use crate::kinematics::JointKind;
-use crate::math::{line_angle_deg, line_line_distance};
+use crate::math::{Vec3, line_angle_deg, line_line_distance};
 use crate::model::SceneModel;
 use crate::scan::PartId;
-use crate::truth::TruthObject;
+use crate::truth::{TruthObject, TruthPart};
 
 /// Non-interpolated average precision of a ranked list: `Σ_k (R_k − R_{k−1}) · P_k`, where
 /// `ranked_hits[k]` says whether the k-th prediction (best first) is a true positive and recall
@@ -86,6 +86,26 @@ pub struct JointRow {
     pub axis_error_deg: Option<f32>,
     /// Distance between the hinge lines, metres: revolute joints with the right type only.
     pub hinge_distance_m: Option<f32>,
+    /// Prismatic origin distance, metres: prismatic joints with the right type only (see
+    /// [`prismatic_origin_distance`]).
+    #[serde(default)]
+    pub prismatic_origin_distance_m: Option<f32>,
+}
+
+/// How far a predicted slide line runs from the part that slides: the distance from the
+/// predicted joint origin to the truth child part's centre (the centre of its bounds), measured
+/// perpendicular to the truth axis. A slide joint's origin is not a physical quantity — any point
+/// moves the part the same way — and files put it anywhere (an MJCF slide sits at its body's
+/// frame, which is often the parent's origin: LIBERO's three `wooden_cabinet` drawers and
+/// `short_cabinet`'s all slide from the cabinet's base point), so the truth child's centre is the
+/// reference; for the demo's generated truth it is the truth origin itself. The pipeline puts a
+/// prismatic origin at the child's centre, so this measures where the sliding part was placed
+/// across its direction of travel. `None` when the truth part has no geometry.
+#[must_use]
+pub fn prismatic_origin_distance(predicted_origin: Vec3, truth_axis: Vec3, truth_child_centre: Option<Vec3>) -> Option<f32> {
+    let axis = truth_axis.try_normalize()?;
+    let d = predicted_origin - truth_child_centre?;
+    Some((d - axis * d.dot(axis)).length())
 }
 
 /// Compares every truth joint of an object with the model's joint of the same child part.
@@ -105,14 +125,27 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
             let predicted = if part_missing { None } else { same_pair.or_else(|| model.joint_of(t.child)) };
             let predicted_kind = predicted.map(|j| j.kind);
             let type_correct = predicted_kind == Some(t.kind);
-            let (mut axis_error_deg, mut hinge_distance_m) = (None, None);
+            let (mut axis_error_deg, mut hinge_distance_m, mut prismatic_origin_distance_m) = (None, None, None);
             if let Some(p) = predicted.filter(|_| type_correct && t.kind.is_movable()) {
                 axis_error_deg = Some(line_angle_deg(p.axis_world, t.axis_world));
                 if t.kind == JointKind::Revolute {
                     hinge_distance_m = Some(line_line_distance(p.origin_world, p.axis_world, t.origin_world, t.axis_world));
+                } else {
+                    let centre =
+                        truth.parts.iter().find(|part| part.id == t.child).and_then(TruthPart::aabb).map(|(lo, hi)| 0.5 * (lo + hi));
+                    prismatic_origin_distance_m = prismatic_origin_distance(p.origin_world, t.axis_world, centre);
                 }
             }
-            JointRow { child: t.child, truth_kind: t.kind, predicted_kind, part_missing, type_correct, axis_error_deg, hinge_distance_m }
+            JointRow {
+                child: t.child,
+                truth_kind: t.kind,
+                predicted_kind,
+                part_missing,
+                type_correct,
+                axis_error_deg,
+                hinge_distance_m,
+                prismatic_origin_distance_m,
+            }
         })
         .collect()
 }
@@ -125,6 +158,16 @@ pub(crate) fn unobserved_parts(model: &SceneModel, truth: &TruthObject) -> Vec<P
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn prismatic_origin_distance_ignores_the_offset_along_the_axis() {
+        // A drawer centred at (0, 0.3, 0.8) sliding along +y; a predicted origin 5 cm along the
+        // axis and 3 cm to the side is 3 cm off, wherever the file put its own origin.
+        let d = prismatic_origin_distance(Vec3::new(0.03, 0.35, 0.8), Vec3::new(0.0, -2.0, 0.0), Some(Vec3::new(0.0, 0.3, 0.8)));
+        assert!((d.expect("distance") - 0.03).abs() < 1e-6, "{d:?}");
+        assert_eq!(prismatic_origin_distance(Vec3::ZERO, Vec3::ZERO, Some(Vec3::ONE)), None);
+        assert_eq!(prismatic_origin_distance(Vec3::ZERO, Vec3::Y, None), None);
+    }
 
     #[test]
     fn ap_of_a_perfect_ranking_is_one() {

@@ -91,6 +91,12 @@ pub struct Summary {
     pub median_axis_error_deg: Option<f32>,
     pub hinges_measured: usize,
     pub median_hinge_distance_m: Option<f32>,
+    /// Prismatic joints with the right type whose origin distance was measured.
+    #[serde(default)]
+    pub prismatic_origins_measured: usize,
+    /// Median prismatic origin distance ([`kinematics::prismatic_origin_distance`]), metres.
+    #[serde(default)]
+    pub median_prismatic_origin_distance_m: Option<f32>,
     pub missing_parts: usize,
     /// Truth parts the scan never saw (not scored for joints and edges).
     #[serde(default)]
@@ -171,6 +177,7 @@ fn summarise(objects: &[ObjectRow], unmatched_model_objects: Vec<ObjectId>) -> S
     }
     let axis_errors: Vec<f32> = objects.iter().flat_map(ObjectRow::axis_errors_deg).collect();
     let hinges: Vec<f32> = objects.iter().flat_map(|o| o.joints.iter().filter_map(|j| j.hinge_distance_m)).collect();
+    let slides: Vec<f32> = objects.iter().flat_map(|o| o.joints.iter().filter_map(|j| j.prismatic_origin_distance_m)).collect();
     let joints = objects.iter().map(|o| o.joints.len()).sum();
     let correct_types = objects.iter().map(|o| o.correct_types).sum();
     let movable_joints = objects.iter().map(|o| o.movable_joints).sum();
@@ -193,6 +200,8 @@ fn summarise(objects: &[ObjectRow], unmatched_model_objects: Vec<ObjectId>) -> S
         median_axis_error_deg: median(&axis_errors),
         hinges_measured: hinges.len(),
         median_hinge_distance_m: median(&hinges),
+        prismatic_origins_measured: slides.len(),
+        median_prismatic_origin_distance_m: median(&slides),
         missing_parts: objects.iter().map(|o| o.missing_parts.len()).sum(),
         unobserved_parts: objects.iter().map(|o| o.unobserved_parts.len()).sum(),
         unmatched_model_objects,
@@ -269,6 +278,12 @@ impl Metrics {
             opt(m.mean_axis_error_deg, 2)
         );
         let _ = writeln!(s, "| hinge line distance, median (m, {} joints) | {} |", m.hinges_measured, opt(m.median_hinge_distance_m, 3));
+        let _ = writeln!(
+            s,
+            "| prismatic origin distance, median (m, {} joints) | {} |",
+            m.prismatic_origins_measured,
+            opt(m.median_prismatic_origin_distance_m, 3)
+        );
         let _ = writeln!(s, "| truth parts missing from the model | {} |", m.missing_parts);
         let _ = writeln!(s, "| truth parts the scan never saw (not scored) | {} |", m.unobserved_parts);
         s
@@ -351,12 +366,14 @@ impl fmt::Display for Metrics {
         )?;
         writeln!(
             f,
-            "axis error (deg, {} joints): median {}, mean {}; hinge distance (m, {} joints): median {}",
+            "axis error (deg, {} joints): median {}, mean {}; hinge distance (m, {} joints): median {}; prismatic origin distance (m, {} joints): median {}",
             m.axes_measured,
             opt(m.median_axis_error_deg, 2),
             opt(m.mean_axis_error_deg, 2),
             m.hinges_measured,
-            opt(m.median_hinge_distance_m, 3)
+            opt(m.median_hinge_distance_m, 3),
+            m.prismatic_origins_measured,
+            opt(m.median_prismatic_origin_distance_m, 3)
         )?;
         if m.missing_parts > 0 {
             let missing: Vec<String> = self.objects.iter().flat_map(|o| o.missing_parts.iter().map(ToString::to_string)).collect();

@@ -9,6 +9,7 @@
 //! | slide, slider, sliding, sash | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
 //! | knob, dial | revolute | the outward face normal | knob centre | −π .. π |
 //! | button, switch | prismatic | into the parent | button centre | 0 .. `button_travel_m` |
+//! | no joint word, but a handle mounted on it | from geometry ([`joint_from_handle`]): drawer (handle centred) or door (thin panel, handle off centre) at the parent's front; else fixed | as drawer / door | as drawer / door | as drawer / door |
 //!
 //! Axes are signed so that positive motion opens: a drawer slides out, a door swings away from
 //! its parent.
@@ -208,6 +209,66 @@ pub fn estimate_joint(
     joint
 }
 
+/// A handle whose offset from the panel's centre is below this fraction of the panel's half
+/// extent, along both in-plane axes, is centred: the panel is pulled straight out.
+const CENTRED_HANDLE: f32 = 0.35;
+
+/// The joint template a part calls for from its geometry when its label names no joint but a
+/// handle is mounted on it (labels + geometry): the handle marks the part's front, the side
+/// it is pulled from. With `n` the parent's face normal nearest that front, the part must sit at
+/// the parent's front (its front face within `max(3 cm, 10 %` of the parent's depth) of the
+/// parent's face along `n`, `n` horizontal, its centre inside the parent's face outline); then
+/// - a handle centred on the front → a drawer: prismatic out of the front (a drawer front is
+///   pulled straight out; a closed drawer shows only its front, so its depth cannot decide);
+/// - a handle off centre on a thin panel (thickness at most half its smaller side) → a door:
+///   revolute, hinged on the edge away from the handle (the handle sits where the lever is).
+///
+/// Returns the kind and the outward front normal (the mount normal for [`estimate_joint`]);
+/// `None` keeps the part rigid (no front found, not at the parent's front, a lid-like top face,
+/// a thick block with an off-centre handle).
+#[must_use]
+pub fn joint_from_handle(parent: &Primitive, child: &Primitive, handle: Vec3) -> Option<(JointKind, Vec3)> {
+    let axes = child.axes_world();
+    let half = child.size * 0.5;
+    let d = handle - child.center();
+    // The front: the child axis along which the handle stands farthest beyond the child's box.
+    let front = (0..3).max_by(|&a, &b| (d.dot(axes[a]).abs() - half[a]).total_cmp(&(d.dot(axes[b]).abs() - half[b])))?;
+    let along = d.dot(axes[front]);
+    if along.abs() < 0.5 * half[front] {
+        return None; // the handle is not on a face of the part
+    }
+    let front_dir = axes[front] * along.signum();
+    // Snap to the parent's nearest face normal.
+    let paxes = parent.axes_world();
+    let k = (0..3).max_by(|&a, &b| paxes[a].dot(front_dir).abs().total_cmp(&paxes[b].dot(front_dir).abs()))?;
+    let cos = paxes[k].dot(front_dir);
+    if cos.abs() < 0.87 {
+        return None;
+    }
+    let n = paxes[k] * cos.signum();
+    if n.dot(UP).abs() > 0.7 {
+        return None; // a top face: a lid or a tray, not decided here
+    }
+    let parent_half = parent.size * 0.5;
+    let parent_front = parent.center().dot(n) + parent_half[k];
+    let child_front = child.center().dot(n) + 0.5 * extent_along(child, n);
+    if (child_front - parent_front).abs() > (0.1 * parent.size[k]).max(0.03) {
+        return None;
+    }
+    let offset = child.center() - parent.center();
+    let inside_outline = (0..3).filter(|&a| a != k).all(|a| offset.dot(paxes[a]).abs() <= parent_half[a]);
+    if !inside_outline {
+        return None;
+    }
+    let in_plane: Vec<usize> = (0..3).filter(|&a| a != front).collect();
+    let centred = in_plane.iter().all(|&a| d.dot(axes[a]).abs() < CENTRED_HANDLE * half[a].max(1e-4));
+    if centred {
+        return Some((JointKind::Prismatic, n));
+    }
+    let thin = child.size[front] <= 0.5 * in_plane.iter().map(|&a| child.size[a]).fold(f32::INFINITY, f32::min);
+    thin.then_some((JointKind::Revolute, n))
+}
+
 /// Full extent of a primitive along a world direction.
 fn extent_along(prim: &Primitive, dir: Vec3) -> f32 {
     let axes = prim.axes_world();
@@ -280,6 +341,54 @@ mod tests {
         check("button", JointKind::Prismatic);
         check("leg", JointKind::Fixed);
         check("glorp", JointKind::Fixed);
+    }
+
+    /// What [`joint_from_handle`] makes of `child` on `parent` with a handle at `handle`.
+    fn check_handle(parent: &Primitive, child: &Primitive, handle: Vec3, expected: Option<(JointKind, Vec3)>) {
+        let got = joint_from_handle(parent, child, handle);
+        match (got, expected) {
+            (Some((kind, front)), Some((want, want_front))) => {
+                assert_eq!(kind, want, "{child:?} handle {handle}");
+                assert!(front.dot(want_front) > 0.999, "front {front} for {child:?}");
+            }
+            (None, None) => {}
+            _ => panic!("{got:?}, expected {expected:?} for {child:?} with handle {handle}"),
+        }
+    }
+
+    #[test]
+    fn drawer_named_by_position_with_a_handle_slides() {
+        // LIBERO's wooden cabinet: drawer bodies `cabinet_top/middle/bottom` (labels "top",
+        // "part"); a closed drawer shows only its front, flush with the body's front (y = −0.25).
+        let body = cabinet_body();
+        let front = Primitive::cuboid_at(Vec3::new(0.0, -0.248, 0.8), Vec3::new(0.7, 0.004, 0.2));
+        let deep = Primitive::cuboid_at(Vec3::new(0.0, -0.05, 0.8), Vec3::new(0.7, 0.4, 0.2));
+        let handle = Vec3::new(0.01, -0.265, 0.8);
+        check_handle(&body, &front, handle, Some((JointKind::Prismatic, Vec3::NEG_Y)));
+        check_handle(&body, &deep, handle, Some((JointKind::Prismatic, Vec3::NEG_Y)));
+        // Through the pipeline's estimate: slides out of the front by most of the body's depth.
+        let j =
+            estimate_joint(1, &body, 2, &front, "top", JointKind::Prismatic, Some(handle), Some(Vec3::NEG_Y), &KinematicsConfig::default());
+        assert!(j.axis_world.dot(Vec3::NEG_Y) > 0.999 && (j.upper - 0.85 * 0.5).abs() < 1e-5, "{j:?}");
+    }
+
+    #[test]
+    fn unnamed_panel_with_an_off_centre_handle_swings_and_other_parts_stay_rigid() {
+        let body = cabinet_body();
+        let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
+        // Handle near the door's +x edge: a door, front +y.
+        check_handle(&body, &door, Vec3::new(0.36, 0.29, 0.5), Some((JointKind::Revolute, Vec3::Y)));
+        // The same panel, handle on top (a lid-like top face): not decided here.
+        let lid = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 1.01), Vec3::new(0.8, 0.5, 0.02));
+        check_handle(&body, &lid, Vec3::new(0.0, 0.0, 1.04), None);
+        // A thick block with an off-centre handle is no door.
+        let block = Primitive::cuboid_at(Vec3::new(0.2, 0.1, 0.5), Vec3::new(0.4, 0.3, 0.3));
+        check_handle(&body, &block, Vec3::new(0.36, 0.27, 0.5), None);
+        // A panel standing 20 cm in front of the body is not at its front.
+        let away = Primitive::cuboid_at(Vec3::new(0.0, 0.46, 0.8), Vec3::new(0.7, 0.004, 0.2));
+        check_handle(&body, &away, Vec3::new(0.0, 0.48, 0.8), None);
+        // A handle inside the part's box marks no face.
+        check_handle(&body, &block, Vec3::new(0.2, 0.1, 0.5), None);
     }
 
     fn cabinet_body() -> Primitive {

@@ -12,7 +12,11 @@
 //!   leg's top) is scaled by this factor. Contacts alone are ambiguous at the centimetre level of
 //!   fitting noise — a handle touches the body behind a 2 cm door too, a headboard touches both
 //!   the frame and the mattress end — but the part is mounted on its typical parent. The prior
-//!   only chooses among real contacts; it never creates an edge.
+//!   only chooses among real contacts; it never creates an edge. The same factor divides the
+//!   contact of a grip (handle, pull) with a part when the grip also touches a part set into that
+//!   one (whose box lies inside its box): a drawer front flush with the cabinet's front lies
+//!   inside the box fitted to the cabinet, so the handle's back touches both front faces, but it
+//!   is mounted on the drawer — the part it moves.
 //!
 //! A part with no contact at all is attached by a fallback edge far lighter than any contact, and
 //! reported: to a typical parent of its label when the object has one (the headboard of a bed whose
@@ -24,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use super::arborescence::{WeightedEdge, max_arborescence};
 use crate::contact::{ContactConfig, PairContact, contact};
-use crate::kinematics::{is_base_label, is_typical_parent};
+use crate::kinematics::{is_base_label, is_handle_label, is_typical_parent};
 use crate::model::ContactEdge;
 use crate::primitive::Primitive;
 use crate::report::Warning;
@@ -160,6 +164,9 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
             }
             let weight = match contacts.get(&(p.id, c.id)) {
                 Some(pc) if is_typical_parent(c.label, p.label) => f64::from(pc.weight * cfg.label_prior),
+                Some(pc) if grip_touches_a_part_set_into(c, p, parts, &contacts, cfg.contact.dist_max_m) => {
+                    f64::from(pc.weight / cfg.label_prior.max(1.0))
+                }
                 Some(pc) => f64::from(pc.weight),
                 // No contact: a typical parent of the child's label beats any other part, the
                 // nearest within each group (weights in (1, 2] and (0, 1] × FALLBACK_WEIGHT).
@@ -209,6 +216,40 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
     (PartTree { root, parent, edges: tree_edges, contacts }, warnings)
 }
 
+/// Whether `grip` (a handle-labelled part) also touches another part whose box lies inside
+/// `outer`'s box: then it is mounted on that inner part rather than on `outer` (module docs).
+fn grip_touches_a_part_set_into(
+    grip: &TreePart<'_>,
+    outer: &TreePart<'_>,
+    parts: &[TreePart<'_>],
+    contacts: &BTreeMap<(PartId, PartId), PairContact>,
+    margin_m: f32,
+) -> bool {
+    is_handle_label(grip.label)
+        && parts.iter().any(|q| {
+            q.id != grip.id
+                && q.id != outer.id
+                && contacts.contains_key(&(q.id, grip.id))
+                && lies_within(q.primitive, outer.primitive, margin_m)
+        })
+}
+
+/// Whether every corner of `inner`'s box lies inside `outer`'s box grown by `margin_m`.
+fn lies_within(inner: &Primitive, outer: &Primitive, margin_m: f32) -> bool {
+    let half_outer = outer.size * 0.5 + crate::math::Vec3::splat(margin_m);
+    let half_inner = inner.size * 0.5;
+    (0..8).all(|k| {
+        let sign = crate::math::Vec3::new(
+            if k & 1 == 0 { -1.0 } else { 1.0 },
+            if k & 2 == 0 { -1.0 } else { 1.0 },
+            if k & 4 == 0 { -1.0 } else { 1.0 },
+        );
+        let corner_world = inner.world_from_primitive.transform_point(sign * half_inner);
+        let local = outer.world_from_primitive.inverse_transform_point(corner_world);
+        local.abs().cmple(half_outer).all()
+    })
+}
+
 /// Distance between the bounding boxes of two primitives (0 when they overlap).
 fn primitive_gap(a: &Primitive, b: &Primitive) -> f32 {
     let (alo, ahi) = a.aabb();
@@ -252,6 +293,26 @@ mod tests {
         assert_eq!(tree.parent.get(&3), Some(&2));
         assert!(tree.parent.contains_key(&9));
         assert!(warnings.iter().any(|w| w.subject == "part 9"), "{warnings:?}");
+    }
+
+    #[test]
+    fn handle_on_a_drawer_flush_with_the_body_front_hangs_off_the_drawer() {
+        // The body's box covers the drawer front (flush at y = −0.25): the handle's back face
+        // touches both front faces equally, yet it is mounted on the drawer. Neither label is a
+        // typical parent of a handle (the drawer is named by position).
+        let body = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.8, 0.5, 1.0));
+        let drawer = Primitive::cuboid_at(Vec3::new(0.0, -0.248, 0.8), Vec3::new(0.7, 0.004, 0.2));
+        let handle = Primitive::cuboid_at(Vec3::new(0.0, -0.265, 0.8), Vec3::new(0.1, 0.03, 0.02));
+        let view = [
+            TreePart { id: 1, label: "base", primitive: &body },
+            TreePart { id: 2, label: "top", primitive: &drawer },
+            TreePart { id: 3, label: "handle", primitive: &handle },
+        ];
+        let (tree, _) = build_part_tree(&view, &TreeConfig::default(), &BTreeMap::new());
+        assert_eq!(tree.parent.get(&3), Some(&2), "{:?}", tree.parent);
+        assert_eq!(tree.parent.get(&2), Some(&1), "{:?}", tree.parent);
+        // A part that is not a grip keeps its contact weights (the drawer itself, under the body).
+        assert!(lies_within(&drawer, &body, 0.0) && !lies_within(&body, &drawer, 0.03));
     }
 
     #[test]
