@@ -23,6 +23,7 @@ pub struct IoError {
 }
 
 impl IoError {
+    #[must_use]
     pub fn new(path: &Path, action: &'static str, source: std::io::Error) -> Self {
         Self { path: path.to_path_buf(), action, source }
     }

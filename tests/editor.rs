@@ -1,11 +1,13 @@
 //! The viewer-editor driven as a person drives it: through egui's accessibility tree with
-//! egui_kittest (clicks, drags, keys, typing), on the real app over the demo room, asserting on the
+//! `egui_kittest` (clicks, drags, keys, typing), on the real app over the demo room, asserting on the
 //! resulting scene and the exported URDF. Plus snapshot images of the 3D view and the contact
 //! graph rendered with wgpu (lavapipe on machines without a GPU).
 //!
 //! Without a Vulkan/GL adapter the image tests skip with a loud message — except under CI
 //! (`CI` set), where they fail: CI installs lavapipe.
 #![cfg(feature = "gui")]
+// Helpers outside #[test] functions unwrap too: a failed lookup is a failed test.
+#![allow(clippy::unwrap_used)]
 
 use std::path::Path;
 

@@ -52,7 +52,13 @@ fn an_unknown_label_is_a_rigid_part() {
     let (_, mut scan) = partscene::synth::demo(0);
     let drawer = scan.parts.iter_mut().find(|p| p.label == "drawer").expect("a drawer");
     drawer.label = "glorp".to_owned();
-    let id = drawer.id;
+    let (id, object) = (drawer.id, drawer.object);
+    // With its handle, geometry says what the unnamed part is: a handle centred on a box sunk in
+    // the cabinet's front is a drawer.
+    let scene = run(&scan, &PinnedEdits::default());
+    assert_eq!(scene.joint_of(id).map(|j| j.kind), Some(JointKind::Prismatic));
+    // Without any handle nothing says it moves: rigid.
+    scan.parts.retain(|p| !(p.object == object && p.label == "handle"));
     let scene = run(&scan, &PinnedEdits::default());
     assert_eq!(scene.joint_of(id).map(|j| j.kind), Some(JointKind::Fixed));
     assert_eq!(scene.part(id).map(|p| p.label.as_str()), Some("glorp"));

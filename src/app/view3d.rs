@@ -76,6 +76,7 @@ impl egui_wgpu::CallbackTrait for SceneCallback {
 }
 
 /// Installs the renderer where the paint callback finds it. Returns false without wgpu.
+#[must_use]
 pub fn install_renderer(render_state: Option<&egui_wgpu::RenderState>) -> bool {
     let Some(rs) = render_state else { return false };
     let renderer = SceneRenderer::new(&rs.device, Some(rs.target_format));

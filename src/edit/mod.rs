@@ -71,6 +71,9 @@ pub struct Document {
     pins: PinnedEdits,
     model: SceneModel,
     last_refine: RefineStats,
+    /// The floor height estimated from the scan's background on the first run; edits do not move
+    /// the floor, so re-runs reuse it.
+    floor_z: Option<f32>,
     undo: Vec<HistoryEntry>,
     redo: Vec<HistoryEntry>,
     /// Bumped on every change of the model (views cache on it).
@@ -113,6 +116,7 @@ impl Document {
             pins,
             model: SceneModel::default(),
             last_refine: RefineStats::default(),
+            floor_z: None,
             undo: Vec::new(),
             redo: Vec::new(),
             revision: 0,
@@ -322,7 +326,9 @@ impl Document {
 
     fn reassemble(&mut self) {
         let fitted = self.fitted();
-        let (mut model, stats) = assemble(&fitted, &self.categories, FloorHint::Points(&self.scan.background), &self.config, &self.pins);
+        let floor = self.floor_z.map_or(FloorHint::Points(&self.scan.background), FloorHint::Height);
+        let (mut model, stats) = assemble(&fitted, &self.categories, floor, &self.config, &self.pins);
+        self.floor_z = Some(model.floor_z);
         model.source.clone_from(&self.scan.source);
         self.model = model;
         self.last_refine = stats;

@@ -31,7 +31,10 @@ fn door_with_handle(doc: &Document) -> (PartId, PartId, PartId) {
 
 /// Applies `cmd` to the demo and checks the outcome: `Ok(check)` runs `check` on the edited
 /// document, `Err(text)` expects a refusal whose message contains `text` and an unchanged scene.
-fn check(cmd: impl FnOnce(&Document) -> EditCommand, expected: Result<&dyn Fn(&Document, &Document), &str>) {
+/// Checks run on (before, after) an edit that succeeded.
+type Outcome<'a> = Result<&'a dyn Fn(&Document, &Document), &'a str>;
+
+fn check(cmd: impl FnOnce(&Document) -> EditCommand, expected: Outcome<'_>) {
     let mut doc = demo();
     let before = doc.clone();
     let cmd = cmd(&doc);

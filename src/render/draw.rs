@@ -116,6 +116,8 @@ pub enum PointColors {
 pub const FIT_ERROR_FULL_SCALE_M: f32 = 0.03;
 
 /// What to draw.
+// Independent display toggles, as in any viewer's View menu; an enum set would only obscure them.
+#[allow(clippy::struct_excessive_bools)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DrawOptions {
     pub show_points: bool,
@@ -316,7 +318,7 @@ fn push_joint(out: &mut DrawData, j: &Joint, posed: &BTreeMap<PartId, Primitive>
             out.opaque.push_rod(centre_on_axis - axis * half, centre_on_axis + axis * half, rod, c);
             out.opaque.push_ball(centre_on_axis, rod * 2.5, c);
             // The swing: an arc of the child's far point from lower to upper.
-            let rest_child = view.model.part(j.child).map(|p| p.primitive.center()).unwrap_or(child.center());
+            let rest_child = view.model.part(j.child).map_or(child.center(), |p| p.primitive.center());
             let far = parent_motion.transform_point(rest_child);
             let radial = far - centre_on_axis - axis * (far - centre_on_axis).dot(axis);
             let steps = 24;
@@ -335,7 +337,7 @@ fn push_joint(out: &mut DrawData, j: &Joint, posed: &BTreeMap<PartId, Primitive>
         }
         JointKind::Prismatic => {
             // An arrow along the axis from the child's rest centre over the travel, ticks at the limits.
-            let rest_child = view.model.part(j.child).map(|p| p.primitive.center()).unwrap_or(child.center());
+            let rest_child = view.model.part(j.child).map_or(child.center(), |p| p.primitive.center());
             let start = parent_motion.transform_point(rest_child);
             let travel = (j.upper - j.lower).abs().max(0.05);
             let c = [PRISMATIC[0], PRISMATIC[1], PRISMATIC[2], 1.0];
@@ -440,7 +442,7 @@ mod tests {
         let d = scene_draw_data(&view, &DrawOptions::default());
         assert_eq!(d.opaque.cubes.len(), 2);
         assert_eq!(d.opaque.cylinders.len(), 1, "one hinge rod");
-        assert!(!d.lines.is_empty() && d.lines.len() % 2 == 0);
+        assert!(!d.lines.is_empty() && d.lines.len().is_multiple_of(2));
         let (lo, hi) = d.bounds.unwrap();
         assert!(lo.z <= 0.0 && hi.z >= 1.0);
         let hidden = scene_draw_data(

@@ -209,7 +209,7 @@ impl SceneRenderer {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(name),
                 layout: Some(&layout),
-                vertex: wgpu::VertexState { module: &shader, entry_point: Some(vs), compilation_options: Default::default(), buffers },
+                vertex: wgpu::VertexState { module: &shader, entry_point: Some(vs), compilation_options: wgpu::PipelineCompilationOptions::default(), buffers },
                 primitive: wgpu::PrimitiveState { topology, ..Default::default() },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
@@ -222,7 +222,7 @@ impl SceneRenderer {
                 fragment: Some(wgpu::FragmentState {
                     module: &shader,
                     entry_point: Some(fs),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions::default(),
                     targets: &[Some(wgpu::ColorTargetState {
                         format: VIEW_FORMAT,
                         blend: blended.then_some(wgpu::BlendState::ALPHA_BLENDING),
@@ -287,7 +287,7 @@ impl SceneRenderer {
             vertex: wgpu::VertexState {
                 module: &blit_shader,
                 entry_point: Some("vs_blit"),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
                 buffers: &[],
             },
             primitive: wgpu::PrimitiveState::default(),
@@ -296,7 +296,7 @@ impl SceneRenderer {
             fragment: Some(wgpu::FragmentState {
                 module: &blit_shader,
                 entry_point: Some(if blit_target.is_srgb() { "fs_blit_to_srgb" } else { "fs_blit" }),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
                 targets: &[Some(wgpu::ColorTargetState { format: blit_target, blend: None, write_mask: wgpu::ColorWrites::ALL })],
             }),
             multiview_mask: None,

@@ -96,7 +96,7 @@ fn read_back(
     let (tx, rx) = mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| drop(tx.send(r)));
     device
-        .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: Some(Duration::from_secs(60)) })
+        .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: Some(Duration::from_mins(1)) })
         .map_err(|e| RenderError::ReadBack(e.to_string()))?;
     rx.recv().map_err(|e| RenderError::ReadBack(e.to_string()))?.map_err(|e| RenderError::ReadBack(e.to_string()))?;
     let mapped = slice.get_mapped_range().map_err(|e| RenderError::ReadBack(e.to_string()))?;
