@@ -10,6 +10,7 @@ pub mod contact;
 pub mod eval;
 pub mod export;
 pub mod fit;
+pub mod gap;
 pub mod io;
 pub mod kinematics;
 pub mod math;
