@@ -13,7 +13,7 @@ pub enum EffectKind {
     ViscousDamping,
     /// force = −friction · sign(v); sticks while the other forces are below it.
     CoulombFriction,
-    /// force = −stiffness · (q − rest_position).
+    /// force = −stiffness · (q − `rest_position`).
     Spring,
     /// The true axis is tilted: gravity pulls a revolute joint towards an equilibrium, ∝ sin.
     GravityTilt,
@@ -194,7 +194,12 @@ impl JointPhysics {
     #[must_use]
     pub fn damping_at(&self, q: f64) -> f64 {
         let soft = match self.soft_close {
-            Some((c, engage)) if (q - self.closed_end) * (engage - self.closed_end) >= 0.0 && (q - self.closed_end).abs() <= (engage - self.closed_end).abs() => c,
+            Some((c, engage))
+                if (q - self.closed_end) * (engage - self.closed_end) >= 0.0
+                    && (q - self.closed_end).abs() <= (engage - self.closed_end).abs() =>
+            {
+                c
+            }
             _ => 0.0,
         };
         self.damping + soft

@@ -167,7 +167,13 @@ fn unpack(effects: &mut [Effect], x: &[f64], slots: &[(usize, usize)]) {
 
 /// Fits the effects' parameters (those with `free[e][p]`, all when None) and the segment states.
 #[must_use]
-pub fn fit(problem: &Problem<'_>, init: &[Effect], free: Option<&[Vec<bool>]>, states: Option<Vec<(f64, f64)>>, max_iter: usize) -> FitResult {
+pub fn fit(
+    problem: &Problem<'_>,
+    init: &[Effect],
+    free: Option<&[Vec<bool>]>,
+    states: Option<Vec<(f64, f64)>>,
+    max_iter: usize,
+) -> FitResult {
     let mut effects = init.to_vec();
     let slots: Vec<(usize, usize)> = effects
         .iter()
@@ -198,14 +204,18 @@ pub fn fit(problem: &Problem<'_>, init: &[Effect], free: Option<&[Vec<bool>]>, s
     let mut lambda = 1e-3;
     let mut normal = vec![0.0; m * m];
     let mut jac = vec![0.0; n_rows * m];
-    let row_offsets: Vec<usize> = problem.rows.iter().scan(0, |acc, rows| {
-        let o = *acc;
-        *acc += rows.len();
-        Some(o)
-    }).collect();
+    let row_offsets: Vec<usize> = problem
+        .rows
+        .iter()
+        .scan(0, |acc, rows| {
+            let o = *acc;
+            *acc += rows.len();
+            Some(o)
+        })
+        .collect();
     for _ in 0..max_iter {
         // Jacobian (row-major n_rows × m), forward differences.
-        jac.iter_mut().for_each(|v| *v = 0.0);
+        jac.fill(0.0);
         for (c, slot) in slots.iter().enumerate() {
             let h = 1e-6 * (1.0 + x[c].abs());
             let mut trial = effects.clone();
@@ -220,7 +230,11 @@ pub fn fit(problem: &Problem<'_>, init: &[Effect], free: Option<&[Vec<bool>]>, s
             for d in 0..2 {
                 let mut s = st[k];
                 let h = 1e-6 * (1.0 + if d == 0 { s.0.abs() } else { s.1.abs() });
-                if d == 0 { s.0 += h } else { s.1 += h }
+                if d == 0 {
+                    s.0 += h;
+                } else {
+                    s.1 += h;
+                }
                 let mut rk = Vec::with_capacity(problem.rows[k].len());
                 problem.segment_residuals(k, &physics, s, &mut buf, &mut rk);
                 let c = np + 2 * k + d;
@@ -230,7 +244,7 @@ pub fn fit(problem: &Problem<'_>, init: &[Effect], free: Option<&[Vec<bool>]>, s
                 }
             }
         }
-        normal.iter_mut().for_each(|v| *v = 0.0);
+        normal.fill(0.0);
         let mut grad = vec![0.0; m];
         for row in 0..n_rows {
             let jr = &jac[row * m..(row + 1) * m];
@@ -261,7 +275,8 @@ pub fn fit(problem: &Problem<'_>, init: &[Effect], free: Option<&[Vec<bool>]>, s
                 continue;
             };
             let x_new: Vec<f64> = x.iter().zip(&delta).map(|(a, d)| a + d).collect();
-            let st_new: Vec<(f64, f64)> = st.iter().enumerate().map(|(k, s)| (s.0 + delta[np + 2 * k], s.1 + delta[np + 2 * k + 1])).collect();
+            let st_new: Vec<(f64, f64)> =
+                st.iter().enumerate().map(|(k, s)| (s.0 + delta[np + 2 * k], s.1 + delta[np + 2 * k + 1])).collect();
             let mut eff_new = effects.clone();
             unpack(&mut eff_new, &x_new, &slots);
             let r_new = residuals(&eff_new, &st_new, &mut buf);
@@ -299,6 +314,7 @@ pub fn fit(problem: &Problem<'_>, init: &[Effect], free: Option<&[Vec<bool>]>, s
 }
 
 /// Residual (measured − simulated) of a fit's segments, NaN outside them or where not measured.
+#[must_use]
 pub fn segment_residual(problem: &Problem<'_>, physics: &JointPhysics, states: &[(f64, f64)]) -> Vec<f64> {
     let mut r = vec![f64::NAN; problem.y.len()];
     let mut buf = Vec::new();

@@ -85,7 +85,16 @@ pub struct GenerateConfig {
 
 impl Default for GenerateConfig {
     fn default() -> Self {
-        Self { duration_s: 10.0, rate_hz: 100.0, noise: 0.001, dropout_fraction: 0.0, irregular: false, pose_only: false, seed: 0, effects: Vec::new() }
+        Self {
+            duration_s: 10.0,
+            rate_hz: 100.0,
+            noise: 0.001,
+            dropout_fraction: 0.0,
+            irregular: false,
+            pose_only: false,
+            seed: 0,
+            effects: Vec::new(),
+        }
     }
 }
 
@@ -115,7 +124,11 @@ impl TrueJoint {
             self.tilted_axis.dot(d.cross(self.gravity * self.mass))
         };
         let soft = match self.soft {
-            Some((c, e)) if (q - self.closed_end) * (e - self.closed_end) >= 0.0 && (q - self.closed_end).abs() <= (e - self.closed_end).abs() => c,
+            Some((c, e))
+                if (q - self.closed_end) * (e - self.closed_end) >= 0.0 && (q - self.closed_end).abs() <= (e - self.closed_end).abs() =>
+            {
+                c
+            }
             _ => 0.0,
         };
         effort + g - self.spring.0 * (q - self.spring.1) - (self.damping + soft) * v
@@ -145,6 +158,13 @@ impl TrueJoint {
         let mut guard = 0;
         while left > 1e-12 && guard < 100_000 {
             guard += 1;
+            if v == 0.0 {
+                // Resting against a stop and pushed into it: stays for the rest of the interval.
+                let f = self.smooth_force(q, 0.0, effort);
+                if self.stops.iter().any(|&(p, _, up)| (q - p).abs() < 1e-12 && if up { f >= 0.0 } else { f <= 0.0 }) {
+                    return (q, 0.0, 0.0);
+                }
+            }
             if slide == 0.0 && self.friction > 0.0 && v == 0.0 {
                 let f = self.smooth_force(q, 0.0, effort);
                 if f.abs() <= self.friction {
@@ -197,13 +217,18 @@ pub fn generate_recording(model: &GapModel, cfg: &GenerateConfig) -> Result<Stri
     let dofs = model.dofs();
     for (name, _) in &cfg.effects {
         if !dofs.iter().any(|&j| model.joints[j].name == *name) {
-            return Err(GapError::Model { file: model.file.clone(), field: format!("joint {name}"), message: "not a movable joint".into() });
+            return Err(GapError::Model {
+                file: model.file.clone(),
+                field: format!("joint {name}"),
+                message: "not a movable joint".into(),
+            });
         }
     }
     let mut rng = crate::math::rng(cfg.seed);
     let n = (cfg.duration_s * cfg.rate_hz).round() as usize + 1;
     let period = 1.0 / cfg.rate_hz;
-    let time: Vec<f64> = (0..n).map(|i| i as f64 * period + if cfg.irregular && i > 0 { rng.random_range(-0.3..0.3) * period } else { 0.0 }).collect();
+    let time: Vec<f64> =
+        (0..n).map(|i| i as f64 * period + if cfg.irregular && i > 0 { rng.random_range(-0.3..0.3) * period } else { 0.0 }).collect();
     let zero = vec![0.0; model.joints.len()];
     let mut q_all: Vec<Vec<f64>> = vec![vec![0.0; n]; model.joints.len()];
     let mut effort_all: Vec<Vec<f64>> = vec![vec![0.0; n]; model.joints.len()];
@@ -300,7 +325,11 @@ fn write_csv(
     rng: &mut rand_chacha::ChaCha8Rng,
 ) -> Result<String, GapError> {
     let dofs = model.dofs();
-    let noise = Normal::new(0.0, cfg.noise.max(0.0)).map_err(|e| GapError::Model { file: model.file.clone(), field: "noise".into(), message: e.to_string() })?;
+    let noise = Normal::new(0.0, cfg.noise.max(0.0)).map_err(|e| GapError::Model {
+        file: model.file.clone(),
+        field: "noise".into(),
+        message: e.to_string(),
+    })?;
     let n = time.len();
     let mut drop = vec![false; n];
     if cfg.dropout_fraction > 0.0 {

@@ -75,7 +75,10 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     }
     let observed = observe::observed_positions(model, rec)?;
     if observed.is_empty() {
-        return Err(GapError::Analysis { file: rec.file.clone(), message: "no joint of the model is observed (no .q or pose columns)".into() });
+        return Err(GapError::Analysis {
+            file: rec.file.clone(),
+            message: "no joint of the model is observed (no .q or pose columns)".into(),
+        });
     }
     let mut notes = model.notes.clone();
     for &j in &model.dofs() {
@@ -97,8 +100,8 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
         effects: Vec::new(),
         fit: FitSummary::default(),
         fitted_model: cfg.fitted_model_name.clone(),
-        held_out: HeldOut { t_start: t_split, per_joint: Default::default() },
-        noise_sigma: Default::default(),
+        held_out: HeldOut { t_start: t_split, per_joint: std::collections::BTreeMap::default() },
+        noise_sigma: std::collections::BTreeMap::default(),
         notes,
         series: Vec::new(),
     };
@@ -181,8 +184,13 @@ fn analyze_joint(
         (s.chosen, s.confidence)
     };
     let fitted_physics = JointPhysics::with_effects(joint, &chosen.effects);
-    let mut effects: Vec<EffectReport> =
-        chosen.effects.iter().zip(&chosen.param_std).zip(&confidence).map(|((e, sd), c)| effect_report(joint, &terms[0], gravity, e, sd, *c)).collect();
+    let mut effects: Vec<EffectReport> = chosen
+        .effects
+        .iter()
+        .zip(&chosen.param_std)
+        .zip(&confidence)
+        .map(|((e, sd), c)| effect_report(joint, &terms[0], gravity, e, sd, *c))
+        .collect();
     if !spans.is_empty() {
         let after = fit::segment_residual(&problem, &fitted_physics, &chosen.states);
         let left = mismatch_spans(&after, sigma, cfg.min_mismatch_samples);
@@ -192,8 +200,8 @@ fn analyze_joint(
             effects.push(EffectReport {
                 joint: joint.name.clone(),
                 kind: EffectKind::Unknown.name().into(),
-                params: Default::default(),
-                uncertainty: Default::default(),
+                params: std::collections::BTreeMap::default(),
+                uncertainty: std::collections::BTreeMap::default(),
                 confidence: (1.0 - (sigma / worst).powi(2)).clamp(0.0, 1.0),
                 description: format!(
                     "residual still {:.1}× the noise at {} after fitting the known kinds: physics no known kind explains",
@@ -220,7 +228,8 @@ fn analyze_joint(
         RmsePair::default()
     } else {
         let nominal_t = fit::fit(&train_problem, &[], None, None, 25);
-        let chosen_t = if chosen.effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, &chosen.effects, None, None, 25) };
+        let chosen_t =
+            if chosen.effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, &chosen.effects, None, None, 25) };
         let s0 = train_problem.segments[0].start;
         let b = open_loop_from(&input, &nominal_physics, s0, nominal_t.states[0]);
         let a = open_loop_from(&input, &JointPhysics::with_effects(joint, &chosen_t.effects), s0, chosen_t.states[0]);
@@ -245,14 +254,7 @@ fn analyze_joint(
     JointOutcome { mismatches, effects, all: all_pair, held, sq: (sb, sa, c), series }
 }
 
-fn describe_mismatch(
-    rec: &Recording,
-    joint: &model::GapJoint,
-    y: &[f64],
-    derivs: &[[f64; 3]],
-    residual: &[f64],
-    span: Span,
-) -> Mismatch {
+fn describe_mismatch(rec: &Recording, joint: &model::GapJoint, y: &[f64], derivs: &[[f64; 3]], residual: &[f64], span: Span) -> Mismatch {
     let idx: Vec<usize> = (span.start..=span.end).filter(|&i| y[i].is_finite()).collect();
     let (lo, hi) = idx.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| (a.min(y[i]), b.max(y[i])));
     let vmax = derivs.iter().filter(|d| d[1].is_finite()).map(|d| d[1].abs()).fold(0.0, f64::max);
@@ -310,7 +312,14 @@ fn describe_mismatch(
     }
 }
 
-fn effect_report(joint: &model::GapJoint, terms: &model::JointTerms, gravity: DVec3, e: &Effect, sd: &[f64], confidence: f64) -> EffectReport {
+fn effect_report(
+    joint: &model::GapJoint,
+    terms: &model::JointTerms,
+    gravity: DVec3,
+    e: &Effect,
+    sd: &[f64],
+    confidence: f64,
+) -> EffectReport {
     let rot = joint.kind.is_rotational();
     let (force, length) = if rot { ("N·m", "rad") } else { ("N", "m") };
     let x = &e.params;
@@ -387,4 +396,3 @@ pub fn write_outputs(dir: &Path, model: &GapModel, report: &GapReport) -> Result
     }
     Ok(written)
 }
-

@@ -281,7 +281,9 @@ pub fn parse_model(text: &str, file: &Path) -> Result<GapModel, GapError> {
             urdf_rs::JointType::Revolute => DofKind::Revolute,
             urdf_rs::JointType::Continuous => DofKind::Continuous,
             urdf_rs::JointType::Prismatic => DofKind::Prismatic,
-            ref other => return Err(model_error(field, format!("type {other:?} is not supported (revolute, continuous, prismatic, fixed)"))),
+            ref other => {
+                return Err(model_error(field, format!("type {other:?} is not supported (revolute, continuous, prismatic, fixed)")));
+            }
         };
         let find = |name: &str| index_of.get(name).copied().ok_or_else(|| model_error(field.clone(), format!("unknown link {name:?}")));
         let parent = find(&joint.parent.link)?;
@@ -356,7 +358,9 @@ impl GapModel {
         let joint = &self.joints[j];
         match joint.kind {
             DofKind::Fixed => Iso::IDENTITY,
-            DofKind::Revolute | DofKind::Continuous => Iso { rotation: DQuat::from_axis_angle(joint.axis_joint, q), translation: DVec3::ZERO },
+            DofKind::Revolute | DofKind::Continuous => {
+                Iso { rotation: DQuat::from_axis_angle(joint.axis_joint, q), translation: DVec3::ZERO }
+            }
             DofKind::Prismatic => Iso { rotation: DQuat::IDENTITY, translation: joint.axis_joint * q },
         }
     }
@@ -424,12 +428,9 @@ impl GapModel {
         let d = com - frame.translation;
         let d_perp = d - axis * d.dot(axis);
         match self.joints[j].kind {
-            DofKind::Prismatic => JointTerms {
-                inertia: mass,
-                gravity_const: mass * gravity.dot(axis),
-                subtree_mass_kg: mass,
-                ..JointTerms::default()
-            },
+            DofKind::Prismatic => {
+                JointTerms { inertia: mass, gravity_const: mass * gravity.dot(axis), subtree_mass_kg: mass, ..JointTerms::default() }
+            }
             DofKind::Fixed => JointTerms::default(),
             DofKind::Revolute | DofKind::Continuous => JointTerms {
                 inertia: axis.dot(inertia_com * axis) + mass * d_perp.length_squared(),

@@ -27,10 +27,8 @@ pub fn observed_positions(model: &GapModel, rec: &Recording) -> Result<BTreeMap<
             if moving != j {
                 continue;
             }
-            let from_pose = pose_positions(model, j, &child_from_link, track, &filled, n).map_err(|message| GapError::Analysis {
-                file: rec.file.clone(),
-                message: format!("link {link_name}: {message}"),
-            })?;
+            let from_pose = pose_positions(model, j, &child_from_link, track, &filled, n)
+                .map_err(|message| GapError::Analysis { file: rec.file.clone(), message: format!("link {link_name}: {message}") })?;
             for (qi, pi) in q.iter_mut().zip(from_pose) {
                 if !qi.is_finite() {
                     *qi = pi;
@@ -143,7 +141,7 @@ pub fn smoothed_derivatives(time_s: &[f64], y: &[f64], half: usize) -> Vec<[f64;
     }
     for (k, &i) in valid.iter().enumerate() {
         let lo = k.saturating_sub(half).min(valid.len() - (2 * half + 1));
-        let window = &valid[lo..lo + 2 * half + 1];
+        let window = &valid[lo..=lo + 2 * half];
         let t0 = time_s[i];
         // Normal equations of y = c0 + c1 dt + c2 dt²/2.
         let mut a = [[0.0f64; 3]; 3];

@@ -28,7 +28,11 @@ impl Axes {
 }
 
 fn range(series: &[&[f64]]) -> (f64, f64) {
-    let (lo, hi) = series.iter().flat_map(|s| s.iter()).filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let (lo, hi) = series
+        .iter()
+        .flat_map(|s| s.iter())
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     if lo.is_finite() {
         let pad = 0.05 * (hi - lo).max(1e-9);
         (lo - pad, hi + pad)

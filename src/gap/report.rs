@@ -150,7 +150,9 @@ pub fn fitted_urdf(model: &GapModel, effects: &[EffectReport]) -> Result<String,
                 Some(EffectKind::CoulombFriction) => {
                     joint.dynamics.get_or_insert_with(urdf_rs::Dynamics::default).friction += p("friction");
                 }
-                Some(EffectKind::EndStop) if joint.joint_type == urdf_rs::JointType::Revolute || joint.joint_type == urdf_rs::JointType::Prismatic => {
+                Some(EffectKind::EndStop)
+                    if joint.joint_type == urdf_rs::JointType::Revolute || joint.joint_type == urdf_rs::JointType::Prismatic =>
+                {
                     let position = p("position");
                     let (lo, hi) = (joint.limit.lower, joint.limit.upper);
                     if position > lo && position < hi {

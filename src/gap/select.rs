@@ -14,6 +14,9 @@ use super::locate::mismatch_spans;
 
 /// BIC improvement a new term must bring (strong evidence on Kass–Raftery's scale).
 pub const BIC_MARGIN: f64 = 10.0;
+/// Share of the remaining misfit a new term must explain: BIC alone accepts terms that only
+/// soak up integrator differences once n is large.
+pub const MIN_GAIN: f64 = 0.05;
 /// LM iterations per candidate.
 const MAX_ITER: usize = 25;
 
@@ -42,7 +45,16 @@ fn equation_error(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKin
     let linear: Vec<EffectKind> = kinds
         .iter()
         .copied()
-        .filter(|k| matches!(k, EffectKind::ViscousDamping | EffectKind::CoulombFriction | EffectKind::Spring | EffectKind::GravityTilt | EffectKind::MassScale))
+        .filter(|k| {
+            matches!(
+                k,
+                EffectKind::ViscousDamping
+                    | EffectKind::CoulombFriction
+                    | EffectKind::Spring
+                    | EffectKind::GravityTilt
+                    | EffectKind::MassScale
+            )
+        })
         .collect();
     let width: usize = linear.iter().map(|k| k.param_count()).sum();
     let mut rows: Vec<(Vec<f64>, f64)> = Vec::new();
@@ -97,7 +109,8 @@ fn equation_error(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKin
     let mut sorted = res.clone();
     sorted.sort_by(f64::total_cmp);
     if let Some(&mad) = sorted.get(sorted.len() / 2) {
-        let keep: Vec<(Vec<f64>, f64)> = rows.iter().zip(&res).filter(|(_, r)| **r <= 3.0 * 1.4826 * mad.max(1e-12)).map(|(row, _)| row.clone()).collect();
+        let keep: Vec<(Vec<f64>, f64)> =
+            rows.iter().zip(&res).filter(|(_, r)| **r <= 3.0 * 1.4826 * mad.max(1e-12)).map(|(row, _)| row.clone()).collect();
         if keep.len() > width * 3 {
             coef = solve(&keep);
         }
@@ -128,11 +141,8 @@ fn equation_error(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKin
 /// Fits one structure (set of kinds), trying the few starting points the switch-like kinds need.
 fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind], warm: &[Effect]) -> FitResult {
     let warm_of = |k: EffectKind| warm.iter().find(|e| e.kind == k).cloned();
-    let known: Vec<Effect> = kinds
-        .iter()
-        .filter(|k| matches!(k, EffectKind::EndStop | EffectKind::SoftClose))
-        .filter_map(|&k| warm_of(k))
-        .collect();
+    let known: Vec<Effect> =
+        kinds.iter().filter(|k| matches!(k, EffectKind::EndStop | EffectKind::SoftClose)).filter_map(|&k| warm_of(k)).collect();
     let mut base = equation_error(problem, derivs, kinds, &known);
     for e in &mut base {
         if let Some(w) = warm_of(e.kind) {
@@ -144,6 +154,17 @@ fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind
     let (lo, hi) = used.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     let inertia = problem.input.terms.first().map_or(1.0, |t| t.inertia.max(1e-6));
     let mut starts: Vec<Vec<Effect>> = vec![base.clone()];
+    // Equilibrium-like parameters: also start from the middle of the observed range.
+    for kind in [EffectKind::Spring, EffectKind::GravityTilt] {
+        if kinds.contains(&kind) && warm_of(kind).is_none() {
+            let mut s = base.clone();
+            if let Some(e) = s.iter_mut().find(|e| e.kind == kind) {
+                e.params[0] = e.params[0].abs().max(inertia);
+                e.params[1] = 0.5 * (lo + hi);
+                starts.push(s);
+            }
+        }
+    }
     if kinds.contains(&EffectKind::EndStop) && warm_of(EffectKind::EndStop).is_none() {
         starts = [(hi, true), (lo, false)]
             .into_iter()
@@ -169,7 +190,8 @@ fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind
             for frac in [0.1, 0.2, 0.35, 0.5, 0.7] {
                 let mut st = s.clone();
                 st.push(effect(EffectKind::SoftClose, vec![5.0 * inertia, closed + frac * (far - closed)], false));
-                let free: Vec<Vec<bool>> = st.iter().map(|e| (0..e.params.len()).map(|p| !(e.kind == EffectKind::SoftClose && p == 1)).collect()).collect();
+                let free: Vec<Vec<bool>> =
+                    st.iter().map(|e| (0..e.params.len()).map(|p| !(e.kind == EffectKind::SoftClose && p == 1)).collect()).collect();
                 let r = fit(problem, &st, Some(&free), None, 8);
                 grid.push((r.cost, r.effects));
             }
@@ -221,11 +243,29 @@ pub fn select(problem: &Problem<'_>, derivs: &[[f64; 3]], candidates: &[EffectKi
             }
         }
         match best {
-            Some((t, bic)) if bic < current.bic() - BIC_MARGIN => {
+            Some((t, bic)) if bic < current.bic() - BIC_MARGIN && fits[t].cost < (1.0 - MIN_GAIN) * current.cost => {
                 chosen_kinds.clone_from(&trials[t]);
                 current = fits[t].clone();
             }
             _ => break,
+        }
+    }
+    // Backward pruning: a term whose removal (refitted warm from the chosen fit) costs less than
+    // MIN_GAIN of the misfit only rode along with a better start of the others.
+    let mut pruned = true;
+    while pruned && current.effects.len() > 1 {
+        pruned = false;
+        for e in 0..current.effects.len() {
+            let rest: Vec<Effect> = current.effects.iter().enumerate().filter(|&(k, _)| k != e).map(|(_, x)| x.clone()).collect();
+            let refit = fit(problem, &rest, None, Some(current.states.clone()), MAX_ITER);
+            if refit.cost < (1.0 + MIN_GAIN) * current.cost {
+                let kind = current.effects[e].kind;
+                chosen_kinds.retain(|&k| k != kind);
+                cache.insert(key(&chosen_kinds), refit.clone());
+                current = refit;
+                pruned = true;
+                break;
+            }
         }
     }
     // Confidence: the chosen model against dropping each term and against swapping it.
