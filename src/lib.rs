@@ -13,6 +13,7 @@ pub mod edit;
 pub mod eval;
 pub mod export;
 pub mod fit;
+pub mod gap;
 pub mod io;
 pub mod kinematics;
 pub mod math;

@@ -153,6 +153,19 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
+    /// Reality gap: compare a recording of the real object with simulation of the model, locate
+    /// mismatches, find and fit the missing physics; writes report.json, model.fitted.urdf,
+    /// model.fitted.json and plot_<joint>.svg into --out.
+    Gap {
+        /// The URDF (default: the recording's `# model:` line, relative to the CSV).
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// The recording (CSV, spec gap-recording.md).
+        #[arg(long)]
+        recording: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 /// indicatif bars on stderr, only on a terminal and not in --json mode.
@@ -254,6 +267,7 @@ fn main() -> Result<()> {
             scan_asset_cmd(&asset, &out, &scanner, up.as_deref(), category, seed, cli.json)
         }
         Command::Bench { dir, markdown, seed } => bench_cmd(&dir, markdown.as_deref(), seed, &cfg, cli.json),
+        Command::Gap { model, recording, out } => gap_cmd(model.as_deref(), &recording, &out, cli.json),
     }
 }
 
@@ -510,6 +524,33 @@ fn render_cmd(
         println!("{}", serde_json::json!({"out": out, "width": image.width(), "height": image.height(), "adapter": adapter}));
     } else {
         println!("rendered {} ({}×{}) on {adapter} in {:.2} s", out.display(), image.width(), image.height(), t.elapsed().as_secs_f64());
+    }
+    Ok(())
+}
+
+fn gap_cmd(model: Option<&Path>, recording: &Path, out: &Path, json: bool) -> Result<()> {
+    use partscene::gap;
+    let rec = gap::read_recording(recording)?;
+    let model_path = match (model, rec.metadata.get("model")) {
+        (Some(m), _) => m.to_path_buf(),
+        (None, Some(rel)) => recording.parent().unwrap_or(Path::new(".")).join(rel),
+        (None, None) => anyhow::bail!("no --model given and {} has no `# model:` line", recording.display()),
+    };
+    let model = gap::load_model(&model_path)?;
+    let started = Instant::now();
+    let report = gap::analyze(&model, &rec, &gap::GapConfig::default())?;
+    gap::write_outputs(out, &model, &report)?;
+    if json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        println!("analysed {} in {:.2} s -> {}", recording.display(), started.elapsed().as_secs_f64(), out.display());
+        for m in &report.mismatches {
+            println!("mismatch {} {:.2}-{:.2} s rmse {:.4}: {}", m.joint, m.t_start, m.t_end, m.rmse, m.description);
+        }
+        for e in &report.effects {
+            println!("effect {} {} (confidence {:.2}): {}", e.joint, e.kind, e.confidence, e.description);
+        }
+        println!("rmse {:.5} -> {:.5}", report.fit.rmse_before, report.fit.rmse_after);
     }
     Ok(())
 }

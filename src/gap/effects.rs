@@ -1,0 +1,219 @@
+//! The library of candidate physics terms (spec §3 effect kinds) and the per-joint dynamics they
+//! add up to.
+
+use serde::Serialize;
+
+use super::model::{DofKind, GapJoint};
+
+/// A kind of physics the model may have left out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectKind {
+    /// force = −damping · v.
+    ViscousDamping,
+    /// force = −friction · sign(v); sticks while the other forces are below it.
+    CoulombFriction,
+    /// force = −stiffness · (q − `rest_position`).
+    Spring,
+    /// The true axis is tilted: gravity pulls a revolute joint towards an equilibrium, ∝ sin.
+    GravityTilt,
+    /// A hard stop at `position` not in the model.
+    EndStop,
+    /// True inertia = scale × modelled.
+    MassScale,
+    /// Viscous damping only between `engage_position` and the closed end.
+    SoftClose,
+    /// Structure in the residual that no known kind explains.
+    Unknown,
+}
+
+impl EffectKind {
+    /// Every fittable kind, in a fixed order (ties in selection go to the earlier one).
+    pub const FITTABLE: [Self; 7] =
+        [Self::ViscousDamping, Self::CoulombFriction, Self::Spring, Self::GravityTilt, Self::EndStop, Self::MassScale, Self::SoftClose];
+
+    /// The spec's name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::ViscousDamping => "viscous_damping",
+            Self::CoulombFriction => "coulomb_friction",
+            Self::Spring => "spring",
+            Self::GravityTilt => "gravity_tilt",
+            Self::EndStop => "end_stop",
+            Self::MassScale => "mass_scale",
+            Self::SoftClose => "soft_close",
+            Self::Unknown => "unknown",
+        }
+    }
+
+    /// Names of the internal parameters, in order.
+    #[must_use]
+    pub fn internal_params(self) -> &'static [&'static str] {
+        match self {
+            Self::ViscousDamping => &["damping"],
+            Self::SoftClose => &["damping", "engage_position"],
+            Self::CoulombFriction => &["friction"],
+            Self::Spring => &["stiffness", "rest_position"],
+            Self::GravityTilt => &["torque_amplitude", "equilibrium_position"],
+            Self::EndStop => &["position", "restitution"],
+            Self::MassScale => &["scale"],
+            Self::Unknown => &[],
+        }
+    }
+
+    /// Number of internal parameters.
+    #[must_use]
+    pub fn param_count(self) -> usize {
+        match self {
+            Self::ViscousDamping | Self::CoulombFriction | Self::MassScale => 1,
+            Self::Spring | Self::GravityTilt | Self::EndStop | Self::SoftClose => 2,
+            Self::Unknown => 0,
+        }
+    }
+
+    /// Whether the kind makes sense on a joint of this type.
+    #[must_use]
+    pub fn applies_to(self, kind: DofKind) -> bool {
+        match self {
+            Self::GravityTilt => kind.is_rotational(),
+            Self::Unknown => false,
+            _ => kind != DofKind::Fixed,
+        }
+    }
+
+    /// Parses the spec's name.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::FITTABLE.into_iter().chain([Self::Unknown]).find(|k| k.name() == name)
+    }
+}
+
+/// One effect with its internal parameters (see [`EffectKind::internal_params`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Effect {
+    /// Kind.
+    pub kind: EffectKind,
+    /// Internal parameters.
+    pub params: Vec<f64>,
+    /// For `end_stop`: true when the stop blocks motion upwards (q may not exceed `position`).
+    pub blocks_upward: bool,
+}
+
+/// An extra hard stop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stop {
+    /// Position of the stop.
+    pub position: f64,
+    /// Coefficient of restitution in [0, 1].
+    pub restitution: f64,
+    /// True: q ≤ position; false: q ≥ position.
+    pub blocks_upward: bool,
+}
+
+/// Everything the 1-DoF integrator needs about one joint beyond the rigid-body terms.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointPhysics {
+    /// Rotational or translational.
+    pub kind: DofKind,
+    /// Total viscous damping.
+    pub damping: f64,
+    /// Total Coulomb friction.
+    pub friction: f64,
+    /// Spring stiffness.
+    pub stiffness: f64,
+    /// Spring rest position.
+    pub rest_position: f64,
+    /// Amplitude of the tilt gravity effort (−amplitude · sin(q − equilibrium)).
+    pub tilt_amplitude: f64,
+    /// Equilibrium of the tilt term.
+    pub tilt_equilibrium: f64,
+    /// Inertia multiplier.
+    pub mass_scale: f64,
+    /// Extra stops.
+    pub stops: Vec<Stop>,
+    /// Soft-close damping and the position where it engages.
+    pub soft_close: Option<(f64, f64)>,
+    /// Closed end of travel (the model's lower limit, else 0).
+    pub closed_end: f64,
+    /// Model limits.
+    pub lower: Option<f64>,
+    /// Model limits.
+    pub upper: Option<f64>,
+}
+
+impl JointPhysics {
+    /// The model joint as written (its `<dynamics>` and limits), no extra effects.
+    #[must_use]
+    pub fn nominal(joint: &GapJoint) -> Self {
+        Self {
+            kind: joint.kind,
+            damping: joint.damping,
+            friction: joint.friction,
+            stiffness: 0.0,
+            rest_position: 0.0,
+            tilt_amplitude: 0.0,
+            tilt_equilibrium: 0.0,
+            mass_scale: 1.0,
+            stops: Vec::new(),
+            soft_close: None,
+            closed_end: joint.lower.unwrap_or(0.0),
+            lower: joint.lower,
+            upper: joint.upper,
+        }
+    }
+
+    /// The model joint with `effects` added.
+    #[must_use]
+    pub fn with_effects(joint: &GapJoint, effects: &[Effect]) -> Self {
+        let mut p = Self::nominal(joint);
+        for e in effects {
+            let x = &e.params;
+            match e.kind {
+                EffectKind::ViscousDamping => p.damping += x[0],
+                EffectKind::CoulombFriction => p.friction += x[0],
+                EffectKind::Spring => (p.stiffness, p.rest_position) = (x[0], x[1]),
+                EffectKind::GravityTilt => (p.tilt_amplitude, p.tilt_equilibrium) = (x[0], x[1]),
+                EffectKind::EndStop => p.stops.push(Stop { position: x[0], restitution: x[1], blocks_upward: e.blocks_upward }),
+                EffectKind::MassScale => p.mass_scale = x[0],
+                EffectKind::SoftClose => p.soft_close = Some((x[0], x[1])),
+                EffectKind::Unknown => {}
+            }
+        }
+        p
+    }
+
+    /// Conservative efforts (spring, tilt) at position q.
+    #[must_use]
+    pub fn position_effort(&self, q: f64) -> f64 {
+        let tilt = if self.tilt_amplitude == 0.0 { 0.0 } else { self.tilt_amplitude * (q - self.tilt_equilibrium).sin() };
+        -self.stiffness * (q - self.rest_position) - tilt
+    }
+
+    /// Total viscous damping at position q (soft close included).
+    #[must_use]
+    pub fn damping_at(&self, q: f64) -> f64 {
+        let soft = match self.soft_close {
+            Some((c, engage))
+                if (q - self.closed_end) * (engage - self.closed_end) >= 0.0
+                    && (q - self.closed_end).abs() <= (engage - self.closed_end).abs() =>
+            {
+                c
+            }
+            _ => 0.0,
+        };
+        self.damping + soft
+    }
+}
+
+/// Keeps parameters physical: non-negative coefficients, restitution in [0, 1], scale ≥ 0.05.
+pub fn clamp_params(kind: EffectKind, x: &mut [f64]) {
+    match kind {
+        EffectKind::ViscousDamping | EffectKind::CoulombFriction | EffectKind::Spring | EffectKind::GravityTilt | EffectKind::SoftClose => {
+            x[0] = x[0].max(0.0);
+        }
+        EffectKind::EndStop => x[1] = x[1].clamp(0.0, 1.0),
+        EffectKind::MassScale => x[0] = x[0].max(0.05),
+        EffectKind::Unknown => {}
+    }
+}

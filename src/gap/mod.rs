@@ -1,0 +1,398 @@
+//! The reality gap (issue 5): when a recording of the real object disagrees with simulation of
+//! the model, find where and why, fit the missing physics and prove it on held-out data.
+//!
+//! `recording` reads the CSV (spec `gap-recording.md`), `model` the URDF, `observe` turns columns
+//! and tracked poses into joint positions, `sim` is the fitter's 1-DoF integrator, `effects` the
+//! library of candidate terms, `locate` the noise estimate and change-point search, `fit` the
+//! multiple-shooting output-error LM, `select` the BIC model selection, `report` the JSON and
+//! fitted model, `plot` the SVG figures, `generate` recordings with concealed effects (different
+//! physics code: RK4 with event location) for tests and demos.
+
+pub mod effects;
+pub mod error;
+pub mod fit;
+pub mod generate;
+pub mod locate;
+pub mod model;
+pub mod observe;
+pub mod plot;
+pub mod recording;
+pub mod report;
+pub mod select;
+pub mod sim;
+
+use std::path::Path;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+pub use effects::{Effect, EffectKind, JointPhysics};
+pub use error::GapError;
+pub use model::{GapModel, load_model, parse_model};
+pub use recording::{Recording, parse_recording, read_recording};
+pub use report::{EffectReport, GapReport, JointSeries, Mismatch, RmsePair};
+
+use locate::{Span, mismatch_spans, noise_sigma, rmse_over};
+use report::{Conditions, FitSummary, HeldOut};
+use sim::SimInput;
+
+/// Analysis settings.
+#[derive(Debug, Clone)]
+pub struct GapConfig {
+    /// Share of the recording (at the end) held out for validation.
+    pub held_out_fraction: f64,
+    /// Most effects per joint.
+    pub max_terms: usize,
+    /// Shortest mismatch, samples.
+    pub min_mismatch_samples: usize,
+    /// Name of the fitted URDF written beside the report.
+    pub fitted_model_name: String,
+}
+
+impl Default for GapConfig {
+    fn default() -> Self {
+        Self { held_out_fraction: 0.3, max_terms: 3, min_mismatch_samples: 10, fitted_model_name: "model.fitted.urdf".into() }
+    }
+}
+
+struct JointOutcome {
+    mismatches: Vec<Mismatch>,
+    effects: Vec<EffectReport>,
+    all: RmsePair,
+    held: RmsePair,
+    sq: (f64, f64, usize),
+    series: JointSeries,
+}
+
+/// Analyses a recording against a model: mismatches, effects, fit, held-out validation, series.
+pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<GapReport, GapError> {
+    let dof_names: Vec<&str> = model.dofs().into_iter().map(|j| model.joints[j].name.as_str()).collect();
+    let link_names: Vec<&str> = model.links.iter().map(|l| l.name.as_str()).collect();
+    rec.check_names(&dof_names, &link_names)?;
+    let n = rec.time_s.len();
+    if n < 20 {
+        return Err(GapError::Analysis { file: rec.file.clone(), message: format!("{n} samples; at least 20 are needed") });
+    }
+    let observed = observe::observed_positions(model, rec)?;
+    if observed.is_empty() {
+        return Err(GapError::Analysis {
+            file: rec.file.clone(),
+            message: "no joint of the model is observed (no .q or pose columns)".into(),
+        });
+    }
+    let mut notes = model.notes.clone();
+    for &j in &model.dofs() {
+        if !observed.contains_key(&j) {
+            notes.push(format!("joint {} is not observed: held at 0", model.joints[j].name));
+        }
+    }
+    let filled: Vec<Vec<f64>> =
+        (0..model.joints.len()).map(|j| observed.get(&j).map_or_else(|| vec![0.0; n], |q| observe::fill_gaps(q))).collect();
+    let gravity = DVec3::from_array(rec.gravity_mps2);
+    let t_split = rec.time_s[0] + (1.0 - cfg.held_out_fraction) * (rec.time_s[n - 1] - rec.time_s[0]);
+    let jobs: Vec<(usize, &Vec<f64>)> = observed.iter().map(|(j, q)| (*j, q)).collect();
+    let outcomes: Vec<JointOutcome> =
+        jobs.par_iter().map(|&(j, y)| analyze_joint(model, rec, cfg, j, y, &filled, gravity, t_split)).collect();
+
+    let mut report = GapReport {
+        format: report::REPORT_FORMAT,
+        mismatches: Vec::new(),
+        effects: Vec::new(),
+        fit: FitSummary::default(),
+        fitted_model: cfg.fitted_model_name.clone(),
+        held_out: HeldOut { t_start: t_split, per_joint: std::collections::BTreeMap::default() },
+        noise_sigma: std::collections::BTreeMap::default(),
+        notes,
+        series: Vec::new(),
+    };
+    let (mut sb, mut sa, mut count) = (0.0, 0.0, 0usize);
+    for o in outcomes {
+        let name = o.series.joint.clone();
+        report.fit.per_joint.insert(name.clone(), o.all);
+        report.held_out.per_joint.insert(name.clone(), o.held);
+        report.noise_sigma.insert(name, o.series.noise_sigma);
+        report.mismatches.extend(o.mismatches);
+        report.effects.extend(o.effects);
+        sb += o.sq.0;
+        sa += o.sq.1;
+        count += o.sq.2;
+        report.series.push(o.series);
+    }
+    let c = count.max(1) as f64;
+    (report.fit.rmse_before, report.fit.rmse_after) = ((sb / c).sqrt(), (sa / c).sqrt());
+    report.mismatches.sort_by(|a, b| b.rmse.total_cmp(&a.rmse).then_with(|| a.joint.cmp(&b.joint)));
+    Ok(report)
+}
+
+fn open_loop_from(input: &SimInput<'_>, physics: &JointPhysics, start: usize, state: (f64, f64)) -> Vec<f64> {
+    let n = input.time_s.len();
+    let mut out = vec![f64::NAN; n];
+    sim::simulate(input, physics, start, n - 1, state.0, state.1, &mut out[start..]);
+    out
+}
+
+fn rmse_mask(y: &[f64], sim: &[f64], keep: impl Fn(usize) -> bool) -> (f64, usize) {
+    let (mut s, mut c) = (0.0, 0usize);
+    for i in 0..y.len() {
+        if keep(i) && y[i].is_finite() && sim[i].is_finite() {
+            s += (y[i] - sim[i]).powi(2);
+            c += 1;
+        }
+    }
+    (s, c)
+}
+
+fn analyze_joint(
+    model: &GapModel,
+    rec: &Recording,
+    cfg: &GapConfig,
+    j: usize,
+    y: &[f64],
+    filled: &[Vec<f64>],
+    gravity: DVec3,
+    t_split: f64,
+) -> JointOutcome {
+    let joint = &model.joints[j];
+    let n = y.len();
+    let mut config = vec![0.0; model.joints.len()];
+    let terms: Vec<model::JointTerms> = (0..n)
+        .map(|i| {
+            for (c, s) in config.iter_mut().zip(filled) {
+                *c = s[i];
+            }
+            model.joint_terms(j, &config, gravity)
+        })
+        .collect();
+    let effort: Vec<f64> = (0..n).map(|i| rec.effort(&joint.name, i)).collect();
+    let input = SimInput { time_s: &rec.time_s, effort: &effort, terms: &terms };
+    let sigma = noise_sigma(&rec.time_s, y).max(1e-7);
+    let derivs = observe::smoothed_derivatives(&rec.time_s, y, 7);
+    let all = vec![true; n];
+    let problem = fit::Problem::new(input, y, &all, sigma, joint);
+    let nominal_physics = JointPhysics::nominal(joint);
+    let nominal = fit::fit(&problem, &[], None, None, 25);
+    let residual = fit::segment_residual(&problem, &nominal_physics, &nominal.states);
+    let spans = mismatch_spans(&residual, sigma, cfg.min_mismatch_samples);
+    let unit = if joint.kind.is_rotational() { "rad" } else { "m" };
+    let mismatches: Vec<Mismatch> = spans.iter().map(|s| describe_mismatch(rec, joint, y, &derivs, &residual, *s)).collect();
+
+    let candidates: Vec<EffectKind> = EffectKind::FITTABLE.into_iter().filter(|k| k.applies_to(joint.kind)).collect();
+    let (chosen, confidence) = if spans.is_empty() {
+        (nominal.clone(), Vec::new())
+    } else {
+        let s = select::select(&problem, &derivs, &candidates, cfg.max_terms, cfg.min_mismatch_samples);
+        (s.chosen, s.confidence)
+    };
+    let fitted_physics = JointPhysics::with_effects(joint, &chosen.effects);
+    let mut effects: Vec<EffectReport> = chosen
+        .effects
+        .iter()
+        .zip(&chosen.param_std)
+        .zip(&confidence)
+        .map(|((e, sd), c)| effect_report(joint, &terms[0], gravity, e, sd, *c))
+        .collect();
+    if !spans.is_empty() {
+        let after = fit::segment_residual(&problem, &fitted_physics, &chosen.states);
+        let left = mismatch_spans(&after, sigma, cfg.min_mismatch_samples);
+        if !left.is_empty() {
+            let worst = left.iter().map(|s| rmse_over(&after, *s)).fold(0.0, f64::max);
+            let ranges: Vec<String> = left.iter().map(|s| format!("{:.2}–{:.2} s", rec.time_s[s.start], rec.time_s[s.end])).collect();
+            effects.push(EffectReport {
+                joint: joint.name.clone(),
+                kind: EffectKind::Unknown.name().into(),
+                params: std::collections::BTreeMap::default(),
+                uncertainty: std::collections::BTreeMap::default(),
+                confidence: (1.0 - (sigma / worst).powi(2)).clamp(0.0, 1.0),
+                description: format!(
+                    "residual still {:.1}× the noise at {} after fitting the known kinds: physics no known kind explains",
+                    worst / sigma,
+                    ranges.join(", ")
+                ),
+            });
+        }
+    }
+
+    // Open loop over the whole record from the first segment's state.
+    let start = problem.segments.first().map_or(0, |s| s.start);
+    let before_sim = open_loop_from(&input, &nominal_physics, start, nominal.states.first().copied().unwrap_or((y[start], 0.0)));
+    let after_sim = open_loop_from(&input, &fitted_physics, start, chosen.states.first().copied().unwrap_or((y[start], 0.0)));
+    let (sb, c) = rmse_mask(y, &before_sim, |_| true);
+    let (sa, _) = rmse_mask(y, &after_sim, |_| true);
+    let cf = c.max(1) as f64;
+    let all_pair = RmsePair { rmse_before: (sb / cf).sqrt(), rmse_after: (sa / cf).sqrt() };
+
+    // Held out: refit on the first part, open loop through the rest.
+    let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
+    let train_problem = fit::Problem::new(input, y, &train, sigma, joint);
+    let held = if train_problem.segments.is_empty() {
+        RmsePair::default()
+    } else {
+        let nominal_t = fit::fit(&train_problem, &[], None, None, 25);
+        let chosen_t =
+            if chosen.effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, &chosen.effects, None, None, 25) };
+        let s0 = train_problem.segments[0].start;
+        let b = open_loop_from(&input, &nominal_physics, s0, nominal_t.states[0]);
+        let a = open_loop_from(&input, &JointPhysics::with_effects(joint, &chosen_t.effects), s0, chosen_t.states[0]);
+        let held_mask = |i: usize| rec.time_s[i] >= t_split;
+        let (hb, hc) = rmse_mask(y, &b, held_mask);
+        let (ha, _) = rmse_mask(y, &a, held_mask);
+        let hc = hc.max(1) as f64;
+        RmsePair { rmse_before: (hb / hc).sqrt(), rmse_after: (ha / hc).sqrt() }
+    };
+    let residual_of = |sim: &[f64]| y.iter().zip(sim).map(|(a, b)| a - b).collect::<Vec<f64>>();
+    let series = JointSeries {
+        joint: joint.name.clone(),
+        unit,
+        time_s: rec.time_s.clone(),
+        measured: y.to_vec(),
+        residual_before: residual_of(&before_sim),
+        residual_after: residual_of(&after_sim),
+        simulated_before: before_sim,
+        simulated_after: after_sim,
+        noise_sigma: sigma,
+    };
+    JointOutcome { mismatches, effects, all: all_pair, held, sq: (sb, sa, c), series }
+}
+
+fn describe_mismatch(rec: &Recording, joint: &model::GapJoint, y: &[f64], derivs: &[[f64; 3]], residual: &[f64], span: Span) -> Mismatch {
+    let idx: Vec<usize> = (span.start..=span.end).filter(|&i| y[i].is_finite()).collect();
+    let (lo, hi) = idx.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| (a.min(y[i]), b.max(y[i])));
+    let vmax = derivs.iter().filter(|d| d[1].is_finite()).map(|d| d[1].abs()).fold(0.0, f64::max);
+    let moving: Vec<f64> = idx.iter().map(|&i| derivs[i][1]).filter(|v| v.is_finite() && v.abs() > 0.05 * vmax).collect();
+    let up = moving.iter().filter(|v| **v > 0.0).count();
+    let down = moving.len() - up;
+    let direction = if moving.len() < idx.len() / 5 {
+        "at rest"
+    } else if up > 4 * down {
+        "increasing"
+    } else if down > 4 * up {
+        "decreasing"
+    } else {
+        "both"
+    };
+    let range = match (joint.lower, joint.upper) {
+        (Some(l), Some(u)) => u - l,
+        _ => (hi - lo).max(1e-6),
+    };
+    let near_stop = if joint.lower.is_some_and(|l| lo - l < 0.05 * range) {
+        Some("lower limit".to_owned())
+    } else if joint.upper.is_some_and(|u| u - hi < 0.05 * range) {
+        Some("upper limit".to_owned())
+    } else {
+        None
+    };
+    // Measured vs simulated speed over the span (simulated: the nominal segments).
+    let mut sim_v = Vec::new();
+    let sim_pos: Vec<f64> = residual.iter().zip(y).map(|(r, y)| y - r).collect();
+    for w in idx.windows(2) {
+        let dt = rec.time_s[w[1]] - rec.time_s[w[0]];
+        if sim_pos[w[0]].is_finite() && sim_pos[w[1]].is_finite() && dt > 0.0 {
+            sim_v.push(((sim_pos[w[1]] - sim_pos[w[0]]) / dt).abs());
+        }
+    }
+    let meas_v: Vec<f64> = idx.iter().map(|&i| derivs[i][1].abs()).filter(|v| v.is_finite()).collect();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let ratio = mean(&meas_v) / mean(&sim_v).max(1e-9);
+    let what = if ratio < 0.7 {
+        "the simulated joint keeps moving; the measured one is slower or stops"
+    } else if ratio > 1.4 {
+        "the measured joint moves faster than the simulated one"
+    } else {
+        "measured and simulated positions drift apart at similar speed"
+    };
+    let unit = if joint.kind.is_rotational() { "rad" } else { "m" };
+    let stop_text = near_stop.as_ref().map_or(String::new(), |s| format!(", near the {s}"));
+    Mismatch {
+        joint: joint.name.clone(),
+        t_start: rec.time_s[span.start],
+        t_end: rec.time_s[span.end],
+        rmse: rmse_over(residual, span),
+        description: format!("{what} (q {lo:.3}–{hi:.3} {unit}, motion {direction}{stop_text})"),
+        conditions: Conditions { position_min: lo, position_max: hi, direction: direction.into(), near_stop },
+    }
+}
+
+fn effect_report(
+    joint: &model::GapJoint,
+    terms: &model::JointTerms,
+    gravity: DVec3,
+    e: &Effect,
+    sd: &[f64],
+    confidence: f64,
+) -> EffectReport {
+    let rot = joint.kind.is_rotational();
+    let (force, length) = if rot { ("N·m", "rad") } else { ("N", "m") };
+    let x = &e.params;
+    let mut params = std::collections::BTreeMap::new();
+    let mut unc = std::collections::BTreeMap::new();
+    let mut put = |k: &str, v: f64, s: f64| {
+        params.insert(k.to_owned(), v);
+        if s.is_finite() {
+            unc.insert(k.to_owned(), s);
+        }
+    };
+    let description = match e.kind {
+        EffectKind::ViscousDamping => {
+            put("damping", x[0], sd[0]);
+            format!("viscous damping {:.4} ± {:.4} {force}·s/{length}", x[0], sd[0])
+        }
+        EffectKind::CoulombFriction => {
+            put("friction", x[0], sd[0]);
+            format!("Coulomb friction {:.4} ± {:.4} {force}", x[0], sd[0])
+        }
+        EffectKind::Spring => {
+            put("stiffness", x[0], sd[0]);
+            put("rest_position", x[1], sd[1]);
+            format!("spring {:.4} {force}/{length} towards {:.3} {length}", x[0], x[1])
+        }
+        EffectKind::GravityTilt => {
+            let lever = terms.subtree_mass_kg * gravity.length() * terms.com_radius_m;
+            let ratio = if lever > 0.0 { (x[0] / lever).clamp(-1.0, 1.0) } else { 0.0 };
+            let tilt = ratio.asin();
+            let sd_tilt = if lever > 0.0 { sd[0] / lever / tilt.cos().max(1e-6) } else { f64::NAN };
+            let eq = (x[1] + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+            put("tilt_deg", tilt.to_degrees(), sd_tilt.to_degrees());
+            put("equilibrium_position", eq, sd[1]);
+            format!("axis tilted {:.2}° from the model; gravity pulls towards {eq:.3} rad ({:.3} N·m peak)", tilt.to_degrees(), x[0])
+        }
+        EffectKind::EndStop => {
+            put("position", x[0], sd[0]);
+            put("restitution", x[1], sd[1]);
+            let side = if e.blocks_upward { "above" } else { "below" };
+            format!("a hard stop at {:.4} {length} (blocks from {side}), restitution {:.2}", x[0], x[1])
+        }
+        EffectKind::MassScale => {
+            put("scale", x[0], sd[0]);
+            format!("inertia along the joint {:.3} × the modelled one", x[0])
+        }
+        EffectKind::SoftClose => {
+            put("damping", x[0], sd[0]);
+            put("engage_position", x[1], sd[1]);
+            format!("soft-close damping {:.3} {force}·s/{length} from {:.4} {length} to the closed end", x[0], x[1])
+        }
+        EffectKind::Unknown => String::new(),
+    };
+    EffectReport { joint: joint.name.clone(), kind: e.kind.name().into(), params, uncertainty: unc, confidence, description }
+}
+
+/// Writes `report.json`, the fitted URDF, `model.fitted.json` and one SVG per joint into `dir`.
+pub fn write_outputs(dir: &Path, model: &GapModel, report: &GapReport) -> Result<Vec<std::path::PathBuf>, GapError> {
+    std::fs::create_dir_all(dir).map_err(|source| crate::io::IoError { path: dir.to_path_buf(), action: "create", source })?;
+    let mut written = Vec::new();
+    let mut put = |name: &str, bytes: &[u8]| -> Result<(), GapError> {
+        let path = dir.join(name);
+        crate::io::atomic_write(&path, bytes)?;
+        written.push(path);
+        Ok(())
+    };
+    let json = serde_json::to_string_pretty(report).unwrap_or_default();
+    put("report.json", json.as_bytes())?;
+    put(&report.fitted_model, report::fitted_urdf(model, &report.effects)?.as_bytes())?;
+    let model_name = model.file.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+    put("model.fitted.json", report::sidecar_json(report, &model_name).as_bytes())?;
+    for s in &report.series {
+        let safe: String = s.joint.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' || c == '-' { c } else { '_' }).collect();
+        put(&format!("plot_{safe}.svg"), plot::joint_svg(s).as_bytes())?;
+    }
+    Ok(written)
+}

@@ -1,0 +1,184 @@
+//! The report (spec §3, `partscene-gap-report/1`), the fitted URDF (`<dynamics>` and stops where
+//! URDF can say it) and the sidecar with every fitted effect.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use super::effects::EffectKind;
+use super::model::GapModel;
+
+/// The report's `format` value.
+pub const REPORT_FORMAT: &str = "partscene-gap-report/1";
+
+/// Conditions during a mismatch.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Conditions {
+    /// Lowest measured position in the span.
+    pub position_min: f64,
+    /// Highest measured position in the span.
+    pub position_max: f64,
+    /// "increasing", "decreasing", "both" or "at rest" (direction of measured motion).
+    pub direction: String,
+    /// "lower limit", "upper limit" or null: whether the joint is near a modelled stop.
+    pub near_stop: Option<String>,
+}
+
+/// Where simulation and recording disagree beyond the noise.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Mismatch {
+    /// Joint name.
+    pub joint: String,
+    /// Start, s.
+    pub t_start: f64,
+    /// End, s.
+    pub t_end: f64,
+    /// RMSE of the residual in the span (rad or m).
+    pub rmse: f64,
+    /// In words.
+    pub description: String,
+    /// Position range, direction, stops.
+    pub conditions: Conditions,
+}
+
+/// A found effect (spec §3 kinds and parameter names).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct EffectReport {
+    /// Joint name.
+    pub joint: String,
+    /// Spec kind name.
+    pub kind: String,
+    /// Parameters in SI units (spec names).
+    pub params: BTreeMap<String, f64>,
+    /// One standard deviation of each parameter (from the LM covariance).
+    pub uncertainty: BTreeMap<String, f64>,
+    /// Probability-like weight of this term against dropping or swapping it (BIC weights).
+    pub confidence: f64,
+    /// In words.
+    pub description: String,
+}
+
+/// RMSE of open-loop simulation against the recording, before and after the fit.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq, Default)]
+pub struct RmsePair {
+    /// The model as written.
+    pub rmse_before: f64,
+    /// The fitted model.
+    pub rmse_after: f64,
+}
+
+/// The `fit` section.
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct FitSummary {
+    /// Over every observed sample of every joint.
+    pub rmse_before: f64,
+    /// Over every observed sample of every joint.
+    pub rmse_after: f64,
+    /// Per joint.
+    pub per_joint: BTreeMap<String, RmsePair>,
+}
+
+/// Held-out validation: parameters fitted on the first part of the recording, open-loop RMSE on
+/// the rest.
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct HeldOut {
+    /// Held-out samples start here, s.
+    pub t_start: f64,
+    /// Per joint.
+    pub per_joint: BTreeMap<String, RmsePair>,
+}
+
+/// The time series behind the plots (for the CLI's images and the editor's live plots).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct JointSeries {
+    /// Joint name.
+    pub joint: String,
+    /// "rad" or "m".
+    pub unit: &'static str,
+    /// Sample times, s.
+    pub time_s: Vec<f64>,
+    /// Measured positions (NaN = dropout).
+    pub measured: Vec<f64>,
+    /// Open-loop simulation of the model as written.
+    pub simulated_before: Vec<f64>,
+    /// Open-loop simulation of the fitted model.
+    pub simulated_after: Vec<f64>,
+    /// Measured − simulated, before (NaN where not measured).
+    pub residual_before: Vec<f64>,
+    /// Measured − simulated, after.
+    pub residual_after: Vec<f64>,
+    /// Estimated measurement noise σ.
+    pub noise_sigma: f64,
+}
+
+/// The whole report. Serializes to `report.json`; `series` and `fitted` stay in memory.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct GapReport {
+    /// Always [`REPORT_FORMAT`].
+    pub format: &'static str,
+    /// Worst first.
+    pub mismatches: Vec<Mismatch>,
+    /// What the model left out.
+    pub effects: Vec<EffectReport>,
+    /// RMSE before/after over all samples.
+    pub fit: FitSummary,
+    /// File name of the fitted URDF (relative to the report).
+    pub fitted_model: String,
+    /// Held-out validation.
+    pub held_out: HeldOut,
+    /// Estimated noise σ per joint.
+    pub noise_sigma: BTreeMap<String, f64>,
+    /// Assumptions (primitive masses, skipped joints…).
+    pub notes: Vec<String>,
+    /// Plot series, one per analysed joint.
+    #[serde(skip)]
+    pub series: Vec<JointSeries>,
+}
+
+/// The fitted URDF: the model's text with `<dynamics damping friction>` raised by the found
+/// viscous damping and Coulomb friction, and `<limit>` narrowed by found end stops.
+pub fn fitted_urdf(model: &GapModel, effects: &[EffectReport]) -> Result<String, super::error::GapError> {
+    let mut robot = model.robot.clone();
+    for joint in &mut robot.joints {
+        for e in effects.iter().filter(|e| e.joint == joint.name) {
+            let kind = EffectKind::from_name(&e.kind);
+            let p = |name: &str| e.params.get(name).copied().unwrap_or(0.0);
+            match kind {
+                Some(EffectKind::ViscousDamping) => {
+                    joint.dynamics.get_or_insert_with(urdf_rs::Dynamics::default).damping += p("damping");
+                }
+                Some(EffectKind::CoulombFriction) => {
+                    joint.dynamics.get_or_insert_with(urdf_rs::Dynamics::default).friction += p("friction");
+                }
+                Some(EffectKind::EndStop)
+                    if joint.joint_type == urdf_rs::JointType::Revolute || joint.joint_type == urdf_rs::JointType::Prismatic =>
+                {
+                    let position = p("position");
+                    let (lo, hi) = (joint.limit.lower, joint.limit.upper);
+                    if position > lo && position < hi {
+                        if (position - lo).abs() < (hi - position).abs() {
+                            joint.limit.lower = position;
+                        } else {
+                            joint.limit.upper = position;
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    urdf_rs::write_to_string(&robot).map_err(|e| super::error::GapError::Urdf { file: model.file.clone(), message: e.to_string() })
+}
+
+/// The sidecar JSON: every effect (including those URDF cannot express), machine-readable.
+#[must_use]
+pub fn sidecar_json(report: &GapReport, model_file: &str) -> String {
+    let value = serde_json::json!({
+        "format": "partscene-gap-fitted/1",
+        "model": model_file,
+        "urdf": report.fitted_model,
+        "effects": report.effects,
+        "in_urdf": ["viscous_damping -> <dynamics damping>", "coulomb_friction -> <dynamics friction>", "end_stop -> <limit> (restitution only here)"],
+    });
+    serde_json::to_string_pretty(&value).unwrap_or_default()
+}

@@ -1,0 +1,300 @@
+//! Choosing the physics terms: equation-error least squares on smoothed derivatives gives starting
+//! values, output-error LM ([`super::fit`]) fits each candidate structure, and greedy forward
+//! selection by BIC keeps a term only when it pays for its parameters. Look-alikes (spring vs
+//! tilt, viscous vs Coulomb, damping vs mass) compete on the same data, and each kept term's
+//! confidence weighs it against dropping it and against swapping it for every other kind.
+
+use std::collections::BTreeMap;
+
+use rayon::prelude::*;
+
+use super::effects::{Effect, EffectKind, JointPhysics, clamp_params};
+use super::fit::{FitResult, Problem, fit, segment_residual, solve_spd};
+use super::locate::mismatch_spans;
+
+/// BIC improvement a new term must bring (strong evidence on Kass–Raftery's scale).
+pub const BIC_MARGIN: f64 = 10.0;
+/// Share of the remaining misfit a new term must explain: BIC alone accepts terms that only
+/// soak up integrator differences once n is large.
+pub const MIN_GAIN: f64 = 0.05;
+/// LM iterations per candidate.
+const MAX_ITER: usize = 25;
+
+/// The outcome of selection on one joint.
+#[derive(Debug, Clone)]
+pub struct Selection {
+    /// The model as written (segment states only).
+    pub nominal: FitResult,
+    /// The chosen structure, fitted.
+    pub chosen: FitResult,
+    /// Confidence of each chosen effect (same order as `chosen.effects`).
+    pub confidence: Vec<f64>,
+}
+
+fn effect(kind: EffectKind, params: Vec<f64>, blocks_upward: bool) -> Effect {
+    let mut e = Effect { kind, params, blocks_upward };
+    clamp_params(kind, &mut e.params);
+    e
+}
+
+/// Starting values for the linear-in-parameter kinds by equation error: I·a − known forces
+/// regressed on the kinds' features over samples away from stops.
+fn equation_error(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind], known: &[Effect]) -> Vec<Effect> {
+    let physics = JointPhysics::with_effects(problem.joint, known);
+    let vmax = derivs.iter().filter(|d| d[1].is_finite()).map(|d| d[1].abs()).fold(0.0, f64::max);
+    let linear: Vec<EffectKind> = kinds
+        .iter()
+        .copied()
+        .filter(|k| {
+            matches!(
+                k,
+                EffectKind::ViscousDamping
+                    | EffectKind::CoulombFriction
+                    | EffectKind::Spring
+                    | EffectKind::GravityTilt
+                    | EffectKind::MassScale
+            )
+        })
+        .collect();
+    let width: usize = linear.iter().map(|k| k.param_count()).sum();
+    let mut rows: Vec<(Vec<f64>, f64)> = Vec::new();
+    let used: Vec<usize> = problem.rows.iter().flatten().copied().collect();
+    for &i in &used {
+        let [q, v, a] = derivs[i];
+        if !(q.is_finite() && v.is_finite() && a.is_finite()) {
+            continue;
+        }
+        let near = |lim: Option<f64>| lim.is_some_and(|l| (q - l).abs() < 0.02 * (1.0 + l.abs()));
+        if near(physics.lower) || near(physics.upper) || physics.stops.iter().any(|s| (q - s.position).abs() < 0.02) {
+            continue;
+        }
+        let terms = &problem.input.terms[i];
+        let inertia = terms.inertia * physics.mass_scale;
+        let sign = if v.abs() > 0.05 * vmax { v.signum() } else { 0.0 };
+        let known_force =
+            problem.input.effort[i] + terms.gravity(q) + physics.position_effort(q) - physics.damping_at(q) * v - physics.friction * sign;
+        let target = inertia * a - known_force;
+        let mut phi = Vec::with_capacity(width);
+        for k in &linear {
+            match k {
+                EffectKind::ViscousDamping => phi.push(-v),
+                EffectKind::CoulombFriction => phi.push(-sign),
+                EffectKind::Spring => phi.extend([-q, 1.0]),
+                EffectKind::GravityTilt => phi.extend([-q.sin(), q.cos()]),
+                EffectKind::MassScale => phi.push(-inertia * a),
+                _ => {}
+            }
+        }
+        rows.push((phi, target));
+    }
+    let solve = |rows: &[(Vec<f64>, f64)]| {
+        let mut a = vec![0.0; width * width];
+        let mut b = vec![0.0; width];
+        for (phi, t) in rows {
+            for r in 0..width {
+                b[r] += phi[r] * t;
+                for c in 0..width {
+                    a[r * width + c] += phi[r] * phi[c];
+                }
+            }
+        }
+        for r in 0..width {
+            a[r * width + r] += 1e-9 * (1.0 + a[r * width + r]);
+        }
+        solve_spd(&a, &b, width).unwrap_or_else(|| vec![0.0; width])
+    };
+    let mut coef = solve(&rows);
+    // One robust pass: drop rows beyond 3 MAD (impacts, stick-slip transitions).
+    let mut res: Vec<f64> = rows.iter().map(|(phi, t)| (t - phi.iter().zip(&coef).map(|(p, c)| p * c).sum::<f64>()).abs()).collect();
+    let mut sorted = res.clone();
+    sorted.sort_by(f64::total_cmp);
+    if let Some(&mad) = sorted.get(sorted.len() / 2) {
+        let keep: Vec<(Vec<f64>, f64)> =
+            rows.iter().zip(&res).filter(|(_, r)| **r <= 3.0 * 1.4826 * mad.max(1e-12)).map(|(row, _)| row.clone()).collect();
+        if keep.len() > width * 3 {
+            coef = solve(&keep);
+        }
+    }
+    res.clear();
+    let q_mean = used.iter().map(|&i| problem.y[i]).sum::<f64>() / used.len().max(1) as f64;
+    let mut out = Vec::new();
+    let mut c = coef.into_iter();
+    for k in linear {
+        let mut next = || c.next().unwrap_or(0.0);
+        let params = match k {
+            EffectKind::Spring => {
+                let (s, offset) = (next(), next());
+                vec![s, if s.abs() > 1e-9 { offset / s } else { q_mean }]
+            }
+            EffectKind::GravityTilt => {
+                let (c0, c1) = (next(), next());
+                vec![c0.hypot(c1), c1.atan2(c0)]
+            }
+            EffectKind::MassScale => vec![1.0 + next()],
+            _ => vec![next()],
+        };
+        out.push(effect(k, params, false));
+    }
+    out
+}
+
+/// Fits one structure (set of kinds), trying the few starting points the switch-like kinds need.
+fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind], warm: &[Effect]) -> FitResult {
+    let warm_of = |k: EffectKind| warm.iter().find(|e| e.kind == k).cloned();
+    let known: Vec<Effect> =
+        kinds.iter().filter(|k| matches!(k, EffectKind::EndStop | EffectKind::SoftClose)).filter_map(|&k| warm_of(k)).collect();
+    let mut base = equation_error(problem, derivs, kinds, &known);
+    for e in &mut base {
+        if let Some(w) = warm_of(e.kind) {
+            *e = w;
+        }
+    }
+    base.extend(known);
+    let used: Vec<f64> = problem.rows.iter().flatten().map(|&i| problem.y[i]).collect();
+    let (lo, hi) = used.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let inertia = problem.input.terms.first().map_or(1.0, |t| t.inertia.max(1e-6));
+    let mut starts: Vec<Vec<Effect>> = vec![base.clone()];
+    // Equilibrium-like parameters: also start from the middle of the observed range.
+    for kind in [EffectKind::Spring, EffectKind::GravityTilt] {
+        if kinds.contains(&kind) && warm_of(kind).is_none() {
+            let mut s = base.clone();
+            if let Some(e) = s.iter_mut().find(|e| e.kind == kind) {
+                e.params[0] = e.params[0].abs().max(inertia);
+                e.params[1] = 0.5 * (lo + hi);
+                starts.push(s);
+            }
+        }
+    }
+    if kinds.contains(&EffectKind::EndStop) && warm_of(EffectKind::EndStop).is_none() {
+        starts = [(hi, true), (lo, false)]
+            .into_iter()
+            .filter(|&(p, up)| {
+                let lim = if up { problem.joint.upper } else { problem.joint.lower };
+                lim.is_none_or(|l| (l - p).abs() > 0.02 * (hi - lo).max(1e-6))
+            })
+            .map(|(p, up)| {
+                let mut s = base.clone();
+                s.push(effect(EffectKind::EndStop, vec![p, 0.2], up));
+                s
+            })
+            .collect();
+        if starts.is_empty() {
+            starts.push(base.clone());
+        }
+    }
+    if kinds.contains(&EffectKind::SoftClose) && warm_of(EffectKind::SoftClose).is_none() {
+        let closed = problem.joint.lower.unwrap_or(0.0);
+        let far = if (hi - closed).abs() >= (lo - closed).abs() { hi } else { lo };
+        let mut grid = Vec::new();
+        for s in &starts {
+            for frac in [0.1, 0.2, 0.35, 0.5, 0.7] {
+                let mut st = s.clone();
+                st.push(effect(EffectKind::SoftClose, vec![5.0 * inertia, closed + frac * (far - closed)], false));
+                let free: Vec<Vec<bool>> =
+                    st.iter().map(|e| (0..e.params.len()).map(|p| !(e.kind == EffectKind::SoftClose && p == 1)).collect()).collect();
+                let r = fit(problem, &st, Some(&free), None, 8);
+                grid.push((r.cost, r.effects));
+            }
+        }
+        grid.sort_by(|a, b| a.0.total_cmp(&b.0));
+        starts = grid.into_iter().take(1).map(|g| g.1).collect();
+    }
+    starts
+        .iter()
+        .map(|s| fit(problem, s, None, None, MAX_ITER))
+        .min_by(|a, b| a.cost.total_cmp(&b.cost))
+        .unwrap_or_else(|| fit(problem, &base, None, None, MAX_ITER))
+}
+
+fn key(kinds: &[EffectKind]) -> Vec<EffectKind> {
+    let mut k = kinds.to_vec();
+    k.sort_unstable();
+    k
+}
+
+/// Greedy forward selection by BIC over `candidates`, at most `max_terms` terms.
+///
+/// Terms are added only while the current model still leaves a mismatch (a stretch of residual
+/// beyond the noise, [`super::locate::mismatch_spans`]): once the residual is noise, a further
+/// term would fit integrator differences, not physics.
+#[must_use]
+pub fn select(problem: &Problem<'_>, derivs: &[[f64; 3]], candidates: &[EffectKind], max_terms: usize, min_mismatch: usize) -> Selection {
+    let nominal = fit(problem, &[], None, None, MAX_ITER);
+    let mut cache: BTreeMap<Vec<EffectKind>, FitResult> = BTreeMap::new();
+    cache.insert(Vec::new(), nominal.clone());
+    let mut chosen_kinds: Vec<EffectKind> = Vec::new();
+    let mut current = nominal.clone();
+    for round in 0..max_terms {
+        if round > 0 {
+            let physics = JointPhysics::with_effects(problem.joint, &current.effects);
+            let residual = segment_residual(problem, &physics, &current.states);
+            if mismatch_spans(&residual, problem.sigma, min_mismatch).is_empty() {
+                break;
+            }
+        }
+        let trials: Vec<Vec<EffectKind>> =
+            candidates.iter().filter(|k| !chosen_kinds.contains(k)).map(|&k| key(&[chosen_kinds.as_slice(), &[k]].concat())).collect();
+        let fits: Vec<FitResult> = trials.par_iter().map(|kinds| fit_structure(problem, derivs, kinds, &current.effects)).collect();
+        let mut best: Option<(usize, f64)> = None;
+        for (t, (kinds, f)) in trials.iter().zip(&fits).enumerate() {
+            cache.insert(kinds.clone(), f.clone());
+            if best.is_none_or(|(_, b)| f.bic() < b) {
+                best = Some((t, f.bic()));
+            }
+        }
+        match best {
+            Some((t, bic)) if bic < current.bic() - BIC_MARGIN && fits[t].cost < (1.0 - MIN_GAIN) * current.cost => {
+                chosen_kinds.clone_from(&trials[t]);
+                current = fits[t].clone();
+            }
+            _ => break,
+        }
+    }
+    // Backward pruning: a term whose removal (refitted warm from the chosen fit) costs less than
+    // MIN_GAIN of the misfit only rode along with a better start of the others.
+    let mut pruned = true;
+    while pruned && current.effects.len() > 1 {
+        pruned = false;
+        for e in 0..current.effects.len() {
+            let rest: Vec<Effect> = current.effects.iter().enumerate().filter(|&(k, _)| k != e).map(|(_, x)| x.clone()).collect();
+            let refit = fit(problem, &rest, None, Some(current.states.clone()), MAX_ITER);
+            if refit.cost < (1.0 + MIN_GAIN) * current.cost {
+                let kind = current.effects[e].kind;
+                chosen_kinds.retain(|&k| k != kind);
+                cache.insert(key(&chosen_kinds), refit.clone());
+                current = refit;
+                pruned = true;
+                break;
+            }
+        }
+    }
+    // Confidence: the chosen model against dropping each term and against swapping it.
+    let mut needed: Vec<Vec<EffectKind>> = Vec::new();
+    for &e in &chosen_kinds {
+        let rest: Vec<EffectKind> = chosen_kinds.iter().copied().filter(|&k| k != e).collect();
+        needed.push(key(&rest));
+        for &k in candidates.iter().filter(|k| !chosen_kinds.contains(k)) {
+            needed.push(key(&[rest.as_slice(), &[k]].concat()));
+        }
+    }
+    needed.retain(|k| !cache.contains_key(k));
+    needed.dedup();
+    let extra: Vec<FitResult> = needed.par_iter().map(|kinds| fit_structure(problem, derivs, kinds, &current.effects)).collect();
+    cache.extend(needed.into_iter().zip(extra));
+    let bic = current.bic();
+    let confidence = current
+        .effects
+        .iter()
+        .map(|e| {
+            let rest: Vec<EffectKind> = chosen_kinds.iter().copied().filter(|&k| k != e.kind).collect();
+            let mut odds = cache.get(&key(&rest)).map_or(0.0, |f| (-(f.bic() - bic) / 2.0).exp());
+            for &k in candidates.iter().filter(|k| !chosen_kinds.contains(k)) {
+                if let Some(f) = cache.get(&key(&[rest.as_slice(), &[k]].concat())) {
+                    odds += (-(f.bic() - bic) / 2.0).min(50.0).exp();
+                }
+            }
+            1.0 / (1.0 + odds)
+        })
+        .collect();
+    Selection { nominal, chosen: current, confidence }
+}
