@@ -236,3 +236,40 @@ fn snapshot_of_the_contact_graph_panel() {
     h.run_steps(2);
     h.snapshot_options("contact_graph_panel", &snapshot_options());
 }
+
+#[test]
+fn the_gap_panel_finds_damping_hidden_in_a_recording_of_the_open_scene() {
+    use partscene::gap::generate::{GenerateConfig, TrueEffect, generate_recording};
+    let dir = tempfile::tempdir().unwrap();
+    let mut state = AppState::new(PipelineConfig::default(), Autosave::at(None));
+    state.open_blocking(SceneSource::Demo { seed: 0, clean: false }, PinnedEdits::default());
+    let scene = state.doc.as_ref().unwrap().model().clone();
+    let (door, ..) = door_handle_parent(&scene);
+    let joint = format!("{}_joint", partscene::export::link_name(&scene, scene.part(door).unwrap()));
+    // A recording of the real door: the scene's URDF plus a damper the reconstruction cannot know.
+    let urdf = partscene::export::scene_urdf(&scene, &partscene::export::UrdfConfig::default()).unwrap();
+    let model = partscene::gap::parse_model(&urdf, Path::new("scene.urdf")).unwrap();
+    let cfg = GenerateConfig {
+        duration_s: 6.0,
+        effects: vec![(joint.clone(), TrueEffect::ViscousDamping { damping: 0.5 })],
+        ..GenerateConfig::default()
+    };
+    let csv = generate_recording(&model, &cfg).unwrap();
+    let path = dir.path().join("door.csv");
+    std::fs::write(&path, &csv).unwrap();
+    if let Some(keep) = std::env::var_os("PARTSCENE_KEEP_GAP_CASE") {
+        std::fs::create_dir_all(&keep).unwrap();
+        std::fs::write(Path::new(&keep).join("scene.urdf"), &urdf).unwrap();
+        std::fs::write(Path::new(&keep).join("door.csv"), &csv).unwrap();
+    }
+    state.apply(partscene::app::AppCommand::AnalyseRecording(path));
+    assert!(state.gap.open);
+    state.gap.wait();
+    let outcome = state.gap.outcome.as_ref().unwrap_or_else(|| panic!("{:?}", state.gap.error));
+    assert_eq!(outcome.model_source, "the current scene");
+    let on_door: Vec<_> = outcome.report.effects.iter().filter(|e| e.joint == joint).collect();
+    assert_eq!(on_door.iter().map(|e| e.kind.as_str()).collect::<Vec<_>>(), vec!["viscous_damping"]);
+    let damping = on_door[0].params["damping"];
+    assert!((damping - 0.5).abs() < 0.125, "damping {damping}");
+    assert!(outcome.report.series.iter().any(|s| s.joint == joint), "the panel has the door's series to plot");
+}

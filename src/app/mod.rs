@@ -3,6 +3,7 @@
 //! App state ([`state`]) is kept apart from the per-frame UI ([`panels`], [`view3d`]); the UI
 //! sends [`AppCommand`]s that the state applies after the frame. Feature `gui`.
 
+pub mod gap_panel;
 pub mod panels;
 pub mod state;
 pub mod view3d;
@@ -60,10 +61,10 @@ impl PartsceneApp {
 
     /// One frame of UI; returns the commands it produced, already applied.
     pub fn frame_ui(&mut self, ui: &mut egui::Ui) -> Vec<AppCommand> {
-        if self.state.poll_job() {
+        if self.state.poll_job() | self.state.gap.poll() {
             ui.ctx().request_repaint();
         }
-        if self.state.job.is_some() {
+        if self.state.job.is_some() || self.state.gap.running() {
             ui.ctx().request_repaint_after(std::time::Duration::from_millis(50));
         }
         let mut commands = Vec::new();
@@ -91,6 +92,11 @@ impl PartsceneApp {
             .show(ui, |ui| panels::graph_ui(ui, state, &mut commands));
         egui::CentralPanel::no_frame().show(ui, |ui| view3d::view3d_ui(ui, state, &mut self.cache, &mut commands, self.has_gpu));
         panels::windows_ui(ui.ctx(), state, panels, &mut commands);
+        let mut open = state.gap.open;
+        egui::Window::new("Reality gap").open(&mut open).default_size([720.0, 560.0]).show(ui.ctx(), |ui| {
+            gap_panel::gap_ui(ui, &mut state.gap, &mut commands);
+        });
+        state.gap.open &= open;
         self.state.apply_all(commands.clone());
         commands
     }
@@ -115,8 +121,12 @@ fn dropped_files(ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
     let dropped: Vec<PathBuf> =
         ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect());
     for path in dropped {
-        let is_session = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
-        commands.push(if is_session { AppCommand::OpenSession(path) } else { AppCommand::Open(SceneSource::Scan { path }) });
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        commands.push(match ext.as_str() {
+            "json" => AppCommand::OpenSession(path),
+            "csv" => AppCommand::AnalyseRecording(path),
+            _ => AppCommand::Open(SceneSource::Scan { path }),
+        });
     }
 }
 

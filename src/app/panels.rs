@@ -87,6 +87,11 @@ pub fn menu_ui(ui: &mut egui::Ui, state: &mut AppState, panels: &mut PanelState,
                 panels.show_export = true;
                 ui.close();
             }
+            ui.separator();
+            if ui.button("Reality gap: analyse a recording…").clicked() {
+                state.gap.open = true;
+                ui.close();
+            }
         });
         ui.menu_button("Edit", |ui| {
             let undo = state.doc.as_ref().and_then(|d| d.undo_label().map(str::to_owned));

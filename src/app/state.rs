@@ -30,6 +30,8 @@ pub enum AppCommand {
     SaveSession(PathBuf),
     /// Write scene.urdf and scene.json into a folder.
     Export(PathBuf),
+    /// Analyse a recording of the scene moving (reality gap) in the background.
+    AnalyseRecording(PathBuf),
     /// Move a joint (articulation preview; not an edit).
     SetJointPosition {
         child: PartId,
@@ -129,6 +131,8 @@ pub struct AppState {
     pub session_path: String,
     /// Bumped whenever what the 3D view draws changes.
     pub view_generation: u64,
+    /// The reality-gap panel's analysis.
+    pub gap: super::gap_panel::GapState,
 }
 
 impl AppState {
@@ -150,6 +154,7 @@ impl AppState {
             export_dir: "out/export".to_owned(),
             session_path: "out/session.json".to_owned(),
             view_generation: 0,
+            gap: super::gap_panel::GapState::default(),
         }
     }
 
@@ -288,6 +293,11 @@ impl AppState {
                     Ok([urdf, json]) => self.info(format!("exported {} and {}", urdf.display(), json.display())),
                     Err(e) => self.error(e.to_string()),
                 }
+            }
+            AppCommand::AnalyseRecording(path) => {
+                self.gap.open = true;
+                self.gap.recording_text = path.display().to_string();
+                self.gap.start(self.doc.as_ref().map(Document::model), path);
             }
             AppCommand::SetJointPosition { child, q } => {
                 let Some(j) = self.doc.as_ref().and_then(|d| d.model().joint_of(child).copied()) else { return };
