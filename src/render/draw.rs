@@ -282,7 +282,7 @@ fn push_points(out: &mut DrawData, scan: &Scan, view: &SceneView<'_>, options: &
     for part in &scan.parts {
         let motion = view.motions.get(&part.id);
         let prim = view.model.part(part.id).map(|p| p.primitive);
-        let base = part_color(part.id);
+        let base = if view.selected == Some(part.id) { SELECTED } else { part_color(part.id) };
         let dim = |c: [f32; 3]| c.map(|x| x * 0.6);
         for p in part.points.iter().step_by(stride) {
             let color = match (options.point_colors, prim) {
