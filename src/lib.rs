@@ -18,6 +18,7 @@ pub mod io;
 pub mod kinematics;
 pub mod math;
 pub mod model;
+pub mod observe;
 pub mod pipeline;
 pub mod polygon;
 pub mod primitive;
@@ -30,3 +31,5 @@ pub mod scene;
 pub mod synth;
 pub mod tree;
 pub mod truth;
+#[cfg(all(feature = "gui", target_arch = "wasm32"))]
+pub mod web;

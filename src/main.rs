@@ -12,7 +12,8 @@ use partscene::eval::{self, Metrics};
 use partscene::export::{UrdfConfig, read_scene_json, write_scene_files};
 use partscene::io::atomic_write;
 use partscene::model::SceneModel;
-use partscene::pipeline::{PinnedEdits, PipelineConfig, Progress, reconstruct};
+use partscene::observe::{NoObserver, Observer};
+use partscene::pipeline::{PinnedEdits, PipelineConfig, Progress, reconstruct_observed};
 use partscene::scan::{Scan, read_scan, write_scan};
 use partscene::truth::GroundTruth;
 
@@ -31,6 +32,15 @@ struct Cli {
     /// θc: minimum contact ratio.
     #[arg(long, global = true, value_name = "RATIO")]
     contact_min: Option<f32>,
+    /// Log every pipeline stage (scan, primitives, contact graph, tree, refinement steps, joints)
+    /// to this Rerun recording (`demo`, `reconstruct`).
+    #[cfg(feature = "rerun")]
+    #[arg(long, global = true, value_name = "FILE.rrd")]
+    rerun: Option<PathBuf>,
+    /// Log every pipeline stage to a newly spawned Rerun viewer (needs `rerun` installed).
+    #[cfg(feature = "rerun")]
+    #[arg(long, global = true)]
+    rerun_spawn: bool,
     /// Without a command: the viewer-editor on the demo room (with the `gui` feature), else the
     /// demo on the built-in room (seed 0), written to `out/demo`.
     #[command(subcommand)]
@@ -202,6 +212,22 @@ impl Progress for Bars {
     }
 }
 
+/// Where the pipeline's stages are reported: a Rerun recording or viewer when asked for.
+fn observer(cli: &Cli) -> Result<Box<dyn Observer>> {
+    #[cfg(feature = "rerun")]
+    {
+        use partscene::observe::rerun::RerunObserver;
+        if let Some(path) = &cli.rerun {
+            return Ok(Box::new(RerunObserver::save(path)?));
+        }
+        if cli.rerun_spawn {
+            return Ok(Box::new(RerunObserver::spawn()?));
+        }
+    }
+    let _ = cli;
+    Ok(Box::new(NoObserver))
+}
+
 /// The pipeline configuration with the command line's thresholds applied.
 fn config(cli: &Cli) -> Result<PipelineConfig> {
     let mut cfg = PipelineConfig::default();
@@ -236,8 +262,8 @@ fn main() -> Result<()> {
         Command::Render { scene, out, view, width, height, fit_error, open } => {
             render_cmd(&scene, &out, &view, [width, height], fit_error, open, &cfg, cli.json)
         }
-        Command::Demo { seed, count, clean, out } => demo(seed, count, clean, out.as_deref(), &cfg, cli.json),
-        Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, &cfg, cli.json),
+        Command::Demo { seed, count, clean, out } => demo(seed, count, clean, out.as_deref(), &cfg, cli.json, &*observer(&cli)?),
+        Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, &cfg, cli.json, &*observer(&cli)?),
         Command::Eval { scene, truth, scan } => eval_cmd(&scene, &truth, scan.as_deref(), cli.json),
         Command::ScanAsset { asset, out, clean, viewpoints, noise, strays, outliers, image, up, category, seed } => {
             let mut scanner = bench::run::asset_scanner_config(clean);
@@ -295,11 +321,11 @@ fn summary(scene: &SceneModel, seconds: f64) -> String {
     )
 }
 
-fn reconstruct_cmd(scan_path: &Path, out: &Path, cfg: &PipelineConfig, json: bool) -> Result<()> {
+fn reconstruct_cmd(scan_path: &Path, out: &Path, cfg: &PipelineConfig, json: bool, observer: &dyn Observer) -> Result<()> {
     let (scan, scan_warnings) = read_scan(scan_path)?;
     let bars = Bars::new(!json, "parts");
     let t = Instant::now();
-    let mut scene = reconstruct(&scan, cfg, &PinnedEdits::default(), &bars);
+    let mut scene = reconstruct_observed(&scan, cfg, &PinnedEdits::default(), &bars, observer);
     bars.finish();
     let secs = t.elapsed().as_secs_f64();
     scene.warnings.splice(0..0, scan_warnings);
@@ -353,7 +379,7 @@ fn eval_cmd(scene_path: &Path, truth_path: &Path, scan_path: Option<&Path>, json
     Ok(())
 }
 
-fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, cfg: &PipelineConfig, json: bool) -> Result<()> {
+fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, cfg: &PipelineConfig, json: bool, observer: &dyn Observer) -> Result<()> {
     let mut runs = Vec::new();
     for s in seed..seed + count.max(1) {
         let t = Instant::now();
@@ -361,7 +387,7 @@ fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, cfg: &PipelineCo
         let scan_secs = t.elapsed().as_secs_f64();
         let bars = Bars::new(!json, "parts");
         let t = Instant::now();
-        let scene = reconstruct(&scan, cfg, &PinnedEdits::default(), &bars);
+        let scene = reconstruct_observed(&scan, cfg, &PinnedEdits::default(), &bars, observer);
         bars.finish();
         let secs = t.elapsed().as_secs_f64();
         let evaluated = evaluate_both(&scene, &truth, &scan, Some(s));

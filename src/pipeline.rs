@@ -20,7 +20,8 @@ use crate::kinematics::{
 use crate::math::Vec3;
 use crate::model::{ContactEdge, ObjectModel, PartModel, SceneModel};
 use crate::primitive::{Primitive, PrimitiveKind};
-use crate::refine::{RefineConfig, RefineStats, refine_object};
+use crate::observe::{NoObserver, Observer};
+use crate::refine::{RefineConfig, RefineStats, refine_object_observed};
 use crate::report::Warning;
 use crate::scan::{ObjectId, PartId, Scan, ScanPart};
 use crate::scene::{SceneConfig, SceneObject, build_scene, estimate_floor};
@@ -270,11 +271,26 @@ fn prefer_box_for_boards(label: &str, points: &[Vec3], fit: crate::fit::PartFit)
 /// Runs the whole pipeline on a scan.
 #[must_use]
 pub fn reconstruct(scan: &Scan, cfg: &PipelineConfig, edits: &PinnedEdits, progress: &dyn Progress) -> SceneModel {
+    reconstruct_observed(scan, cfg, edits, progress, &NoObserver)
+}
+
+/// [`reconstruct`], reporting every stage to `observer`.
+#[must_use]
+pub fn reconstruct_observed(
+    scan: &Scan,
+    cfg: &PipelineConfig,
+    edits: &PinnedEdits,
+    progress: &dyn Progress,
+    observer: &dyn Observer,
+) -> SceneModel {
+    observer.scan(scan);
     let fitted = fit_parts(scan, &cfg.fit, edits, progress);
+    observer.fitted(&fitted.parts);
     let categories: BTreeMap<ObjectId, String> = scan.objects.iter().map(|(id, o)| (*id, o.category.clone())).collect();
     let floor_hint = FloorHint::Points(&scan.background);
-    let mut scene = assemble(&fitted, &categories, floor_hint, cfg, edits).0;
+    let mut scene = assemble_observed(&fitted, &categories, floor_hint, cfg, edits, observer).0;
     scene.source.clone_from(&scan.source);
+    observer.scene(&scene);
     scene
 }
 
@@ -298,6 +314,19 @@ pub fn assemble(
     cfg: &PipelineConfig,
     edits: &PinnedEdits,
 ) -> (SceneModel, RefineStats) {
+    assemble_observed(fitted, categories, floor, cfg, edits, &NoObserver)
+}
+
+/// [`assemble`], reporting each object's contact graph and refinement steps to `observer`.
+#[must_use]
+pub fn assemble_observed(
+    fitted: &FittedParts,
+    categories: &BTreeMap<ObjectId, String>,
+    floor: FloorHint<'_>,
+    cfg: &PipelineConfig,
+    edits: &PinnedEdits,
+    observer: &dyn Observer,
+) -> (SceneModel, RefineStats) {
     let mut warnings = fitted.warnings.clone();
     let mut by_object: BTreeMap<ObjectId, Vec<&PartModel>> = BTreeMap::new();
     for p in &fitted.parts {
@@ -309,8 +338,13 @@ pub fn assemble(
         .map(|(&obj, parts)| {
             let view: Vec<TreePart> = parts.iter().map(|p| TreePart { id: p.id, label: &p.label, primitive: &p.primitive }).collect();
             let (tree, w) = build_part_tree(&view, &cfg.tree, &edits.parent);
+            observer.contact_graph(obj, tree.root, &tree.edges);
             let mut prims: BTreeMap<PartId, Primitive> = parts.iter().map(|p| (p.id, p.primitive)).collect();
-            let stats = refine_object(&mut prims, &tree, &cfg.refine, &cfg.tree.contact);
+            let mut step = 0;
+            let stats = refine_object_observed(&mut prims, &tree, &cfg.refine, &cfg.tree.contact, &mut |moved, now| {
+                observer.refine_step(obj, step, moved, now);
+                step += 1;
+            });
             (obj, tree, prims, stats, w)
         })
         .collect();

@@ -5,7 +5,7 @@
 //!
 //! Without a Vulkan/GL adapter the image tests skip with a loud message — except under CI
 //! (`CI` set), where they fail: CI installs lavapipe.
-#![cfg(feature = "gui")]
+#![cfg(feature = "gui-tests")]
 // Helpers outside #[test] functions unwrap too: a failed lookup is a failed test.
 #![allow(clippy::unwrap_used)]
 

@@ -43,6 +43,11 @@ pub struct PartsceneApp {
     pub panels: PanelState,
     cache: ViewCache,
     has_gpu: bool,
+    /// Files dropped into the browser, read asynchronously: (name, bytes).
+    #[cfg(target_arch = "wasm32")]
+    web_files: (std::sync::mpsc::Sender<(String, Vec<u8>)>, std::sync::mpsc::Receiver<(String, Vec<u8>)>),
+    #[cfg(target_arch = "wasm32")]
+    web_pending: std::collections::BTreeMap<String, Vec<u8>>,
 }
 
 impl PartsceneApp {
@@ -50,13 +55,24 @@ impl PartsceneApp {
     #[must_use]
     pub fn new(cc: &eframe::CreationContext<'_>, launch: LaunchOptions) -> Self {
         let has_gpu = view3d::install_renderer(cc.wgpu_render_state.as_ref());
+        // The 3D view, the graph and the joint colours are designed for a dark background.
+        cc.egui_ctx.set_theme(egui::Theme::Dark);
         let mut state = AppState::new(launch.config.clone(), Autosave::at(launch.autosave.clone()));
         match (&launch.session, launch.source) {
             (Some(path), _) => state.apply(AppCommand::OpenSession(path.clone())),
             (None, Some(source)) => state.open(source, PinnedEdits::default()),
             (None, None) => state.open(SceneSource::Demo { seed: 0, clean: false }, PinnedEdits::default()),
         }
-        Self { state, panels: PanelState::default(), cache: ViewCache::default(), has_gpu }
+        Self {
+            state,
+            panels: PanelState::default(),
+            cache: ViewCache::default(),
+            has_gpu,
+            #[cfg(target_arch = "wasm32")]
+            web_files: std::sync::mpsc::channel(),
+            #[cfg(target_arch = "wasm32")]
+            web_pending: std::collections::BTreeMap::new(),
+        }
     }
 
     /// One frame of UI; returns the commands it produced, already applied.
@@ -69,7 +85,10 @@ impl PartsceneApp {
         }
         let mut commands = Vec::new();
         shortcuts(ui.ctx(), &mut commands);
+        #[cfg(not(target_arch = "wasm32"))]
         dropped_files(ui.ctx(), &mut commands);
+        #[cfg(target_arch = "wasm32")]
+        self.web_dropped_files(ui.ctx(), &mut commands);
         self.state.last_hovered = self.state.hovered.take();
         let state = &mut self.state;
         let panels = &mut self.panels;
@@ -102,6 +121,33 @@ impl PartsceneApp {
     }
 }
 
+#[cfg(target_arch = "wasm32")]
+impl PartsceneApp {
+    /// Browsers give dropped files' bytes asynchronously: start the reads, and once a PLY is in,
+    /// open it with the labels JSON dropped beside it.
+    fn web_dropped_files(&mut self, ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
+        let title = self.state.doc.as_ref().map_or_else(|| "partscene".to_owned(), |d| format!("partscene — {}", d.source().title()));
+        crate::web::set_title(&title);
+        let dropped: Vec<_> = ctx.input(|i| i.raw.dropped_files.clone());
+        if !dropped.is_empty() {
+            crate::web::read_dropped(dropped, self.web_files.0.clone());
+        }
+        while let Ok((name, bytes)) = self.web_files.1.try_recv() {
+            self.web_pending.insert(name, bytes);
+            ctx.request_repaint();
+        }
+        let ply = self.web_pending.keys().find(|n| n.to_ascii_lowercase().ends_with(".ply")).cloned();
+        if let Some(name) = ply
+            && let Some(bytes) = self.web_pending.remove(&name)
+        {
+            let stem = name.trim_end_matches(".ply").trim_end_matches(".PLY").to_owned();
+            let labels_name = self.web_pending.keys().find(|n| n.starts_with(&stem) && n.ends_with(".json")).cloned();
+            let labels = labels_name.and_then(|n| self.web_pending.remove(&n)).map(|b| String::from_utf8_lossy(&b).into_owned());
+            commands.push(AppCommand::OpenScanBytes { name, ply: bytes, labels });
+        }
+    }
+}
+
 fn shortcuts(ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
     use egui::{Key, KeyboardShortcut, Modifiers};
     let redo = KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
@@ -117,6 +163,7 @@ fn shortcuts(ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
     });
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn dropped_files(ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
     let dropped: Vec<PathBuf> =
         ctx.input(|i| i.raw.dropped_files.iter().map(|f| f.path().to_path_buf()).filter(|p| !p.as_os_str().is_empty()).collect());
@@ -141,6 +188,7 @@ impl eframe::App for PartsceneApp {
 }
 
 /// Opens the editor window.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn run(launch: LaunchOptions) -> Result<(), eframe::Error> {
     let options = eframe::NativeOptions {
         renderer: eframe::Renderer::Wgpu,

@@ -26,6 +26,8 @@ pub enum AppCommand {
     Select(Option<PartId>),
     /// Open a scan or the demo (in the background).
     Open(SceneSource),
+    /// Open a scan given as bytes (files dropped into the browser): the PLY and its labels JSON.
+    OpenScanBytes { name: String, ply: Vec<u8>, labels: Option<String> },
     OpenSession(PathBuf),
     SaveSession(PathBuf),
     /// Write scene.urdf and scene.json into a folder.
@@ -282,11 +284,43 @@ impl AppState {
                 self.touch();
             }
             AppCommand::Open(source) => self.open(source, PinnedEdits::default()),
+            AppCommand::OpenScanBytes { name, ply, labels } => {
+                let labels_name = format!("{}.json", name.trim_end_matches(".ply"));
+                match crate::scan::read_scan_bytes(&ply, &name, labels.as_deref(), &labels_name) {
+                    Ok((scan, warnings)) => {
+                        let source = SceneSource::Scan { path: PathBuf::from(&name) };
+                        let progress = JobProgress::default();
+                        let doc = Document::from_scan(source, Arc::new(scan), self.config.clone(), PinnedEdits::default(), &progress)
+                            .with_warnings(warnings);
+                        let (tx, rx) = std::sync::mpsc::channel();
+                        // Hand it over through the job channel so opening ends the same way everywhere.
+                        let _ = tx.send(Ok(doc));
+                        self.job = Some(LoadJob { what: format!("opening {name}"), progress: Arc::new(progress), result: rx });
+                        self.poll_job();
+                    }
+                    Err(e) => self.error(e.to_string()),
+                }
+            }
             AppCommand::OpenSession(path) => match Session::load(&path) {
                 Ok(session) => self.open(session.source, session.pins),
                 Err(e) => self.error(e.to_string()),
             },
             AppCommand::SaveSession(path) => self.save_session(&path),
+            #[cfg(target_arch = "wasm32")]
+            AppCommand::Export(_) => {
+                // In the browser the files are downloads.
+                let Some(doc) = &self.doc else { return self.error("nothing to export: no scene is open") };
+                let urdf = crate::export::scene_urdf(doc.model(), &crate::export::UrdfConfig::default());
+                let result = urdf.map_err(|e| e.to_string()).and_then(|urdf| {
+                    crate::web::download("scene.urdf", urdf.as_bytes())?;
+                    crate::web::download("scene.json", crate::export::scene_json(doc.model()).as_bytes())
+                });
+                match result {
+                    Ok(()) => self.info("downloaded scene.urdf and scene.json"),
+                    Err(e) => self.error(format!("download failed: {e}")),
+                }
+            }
+            #[cfg(not(target_arch = "wasm32"))]
             AppCommand::Export(dir) => {
                 let Some(doc) = &self.doc else { return self.error("nothing to export: no scene is open") };
                 match doc.export(&dir) {

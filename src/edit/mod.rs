@@ -74,6 +74,8 @@ pub struct Document {
     /// The floor height estimated from the scan's background on the first run; edits do not move
     /// the floor, so re-runs reuse it.
     floor_z: Option<f32>,
+    /// Warnings from reading the scan, kept in front of every re-run's.
+    read_warnings: Vec<Warning>,
     undo: Vec<HistoryEntry>,
     redo: Vec<HistoryEntry>,
     /// Bumped on every change of the model (views cache on it).
@@ -90,9 +92,7 @@ impl Document {
             }
             SceneSource::Scan { path } => crate::scan::read_scan(path)?,
         };
-        let mut doc = Self::from_scan(source, Arc::new(scan), config, pins, progress);
-        doc.model.warnings.splice(0..0, warnings);
-        Ok(doc)
+        Ok(Self::from_scan(source, Arc::new(scan), config, pins, progress).with_warnings(warnings))
     }
 
     /// Opens a saved session (its scan is read again and the pins re-applied).
@@ -117,12 +117,21 @@ impl Document {
             model: SceneModel::default(),
             last_refine: RefineStats::default(),
             floor_z: None,
+            read_warnings: Vec::new(),
             undo: Vec::new(),
             redo: Vec::new(),
             revision: 0,
         };
         doc.reassemble();
         doc
+    }
+
+    /// Adds warnings from reading the scan in front of the pipeline's.
+    #[must_use]
+    pub fn with_warnings(mut self, warnings: Vec<Warning>) -> Self {
+        self.model.warnings.splice(0..0, warnings.iter().cloned());
+        self.read_warnings = warnings;
+        self
     }
 
     #[must_use]
@@ -330,6 +339,7 @@ impl Document {
         let (mut model, stats) = assemble(&fitted, &self.categories, floor, &self.config, &self.pins);
         self.floor_z = Some(model.floor_z);
         model.source.clone_from(&self.scan.source);
+        model.warnings.splice(0..0, self.read_warnings.iter().cloned());
         self.model = model;
         self.last_refine = stats;
         self.revision += 1;

@@ -87,10 +87,36 @@ pub fn refine_object(
     cfg: &RefineConfig,
     contact_cfg: &ContactConfig,
 ) -> RefineStats {
+    refine_object_observed(prims, tree, cfg, contact_cfg, &mut |_, _| {})
+}
+
+/// [`refine_object`], calling `on_step(child, primitives)` after each child is refined.
+pub fn refine_object_observed(
+    prims: &mut BTreeMap<PartId, Primitive>,
+    tree: &PartTree,
+    cfg: &RefineConfig,
+    contact_cfg: &ContactConfig,
+    on_step: &mut dyn FnMut(PartId, &BTreeMap<PartId, Primitive>),
+) -> RefineStats {
     let mut stats = RefineStats::default();
     for child in tree.top_down().into_iter().skip(1) {
-        let Some(&parent) = tree.parent.get(&child) else { continue };
-        let (Some(p), Some(c)) = (prims.get(&parent).copied(), prims.get(&child).copied()) else { continue };
+        refine_child(prims, tree, cfg, contact_cfg, child, &mut stats);
+        on_step(child, prims);
+    }
+    stats
+}
+
+fn refine_child(
+    prims: &mut BTreeMap<PartId, Primitive>,
+    tree: &PartTree,
+    cfg: &RefineConfig,
+    contact_cfg: &ContactConfig,
+    child: PartId,
+    stats: &mut RefineStats,
+) {
+    {
+        let Some(&parent) = tree.parent.get(&child) else { return };
+        let (Some(p), Some(c)) = (prims.get(&parent).copied(), prims.get(&child).copied()) else { return };
         if let Some(rot) = aligning_rotation(&p, &c, cfg.align_min) {
             let angle = rot.angle_between(Quat::IDENTITY).to_degrees();
             if angle > 1e-4 {
@@ -100,15 +126,15 @@ pub fn refine_object(
             }
         }
         if !cfg.snap_contacts {
-            continue;
+            return;
         }
-        let Some(c) = prims.get(&child).copied() else { continue };
+        let Some(c) = prims.get(&child).copied() else { return };
         // Use a looser alignment for finding the touching faces: they are aligned now.
-        let Some(pc) = contact(&p, &c, contact_cfg) else { continue };
+        let Some(pc) = contact(&p, &c, contact_cfg) else { return };
         let pp = &surface_planes(&p)[pc.parent_face];
         let cp = &surface_planes(&c)[pc.child_face];
         if pp.normal.dot(cp.normal).abs() < cfg.align_min {
-            continue;
+            return;
         }
         let s = pp.signed_distance(cp.center());
         if s.abs() > 1e-6 && s.abs() <= contact_cfg.dist_max_m {
@@ -117,7 +143,6 @@ pub fn refine_object(
             stats.max_translation_m = stats.max_translation_m.max(s.abs());
         }
     }
-    stats
 }
 
 #[cfg(test)]
