@@ -328,7 +328,7 @@ fn rapier_run(joint: &str, dynamics: RapierDynamics, time_s: &[f64], effort: &[f
         2.0 * f64::from(s).atan2(f64::from(r.w))
     };
     let mut out = Vec::with_capacity(time_s.len());
-    for i in 0..time_s.len() {
+    for (i, &e) in effort.iter().enumerate().take(time_s.len()) {
         out.push(angle(&world));
         if i + 1 == time_s.len() {
             break;
@@ -336,7 +336,7 @@ fn rapier_run(joint: &str, dynamics: RapierDynamics, time_s: &[f64], effort: &[f
         for _ in 0..substeps {
             let body = &mut world.bodies[child];
             body.reset_torques(true);
-            body.add_torque(axis * effort[i] as f32, true);
+            body.add_torque(axis * e as f32, true);
             world.step();
         }
     }
@@ -397,7 +397,13 @@ fn fitter_integrator_agrees_with_rapier3d() {
             &door_effort,
             0.002,
         ),
-        ("lid pendulum (gravity) + damping 0.05", "lid_hinge", RapierDynamics { damping: 0.05, ..RapierDynamics::default() }, &lid_effort, 0.002),
+        (
+            "lid pendulum (gravity) + damping 0.05",
+            "lid_hinge",
+            RapierDynamics { damping: 0.05, ..RapierDynamics::default() },
+            &lid_effort,
+            0.002,
+        ),
         ("door Coulomb 0.2", "door_hinge", RapierDynamics { friction: 0.2, ..RapierDynamics::default() }, &door_effort, 0.002),
     ];
     for (name, joint, dynamics, effort, tolerance) in cases {
@@ -416,6 +422,7 @@ fn fitter_integrator_agrees_with_rapier3d() {
 #[cfg(feature = "sim")]
 fn rapier_recording(dynamics: RapierDynamics, seed: u64) -> String {
     use rand::Rng;
+    use std::fmt::Write as _;
     let mut rng = partscene::math::rng(seed);
     let time: Vec<f64> = (0..=1000).map(|i| f64::from(i) * 0.01).collect();
     let mut effort = vec![0.0; time.len()];
@@ -432,10 +439,12 @@ fn rapier_recording(dynamics: RapierDynamics, seed: u64) -> String {
     }
     let q = rapier_run("door_hinge", dynamics, &time, &effort, 20);
     let noise = rand_distr::Normal::new(0.0, 0.001).expect("normal");
-    let mut csv = String::from("# description: rapier3d multibody, hidden dynamics on door_hinge\n# model: rig.urdf\ntime,door_hinge.q,door_hinge.effort\n");
+    let mut csv = String::from(
+        "# description: rapier3d multibody, hidden dynamics on door_hinge\n# model: rig.urdf\ntime,door_hinge.q,door_hinge.effort\n",
+    );
     for i in 0..time.len() {
         let y = q[i] + rand_distr::Distribution::sample(&noise, &mut rng);
-        csv.push_str(&format!("{:.3},{y:.7},{:.6}\n", time[i], effort[i]));
+        let _ = writeln!(csv, "{:.3},{y:.7},{:.6}", time[i], effort[i]);
     }
     csv
 }
@@ -456,14 +465,51 @@ fn recordings_generated_by_rapier3d() {
     let report = analyse(truth);
     let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
     let held = report.held_out.per_joint["door_hinge"];
-    eprintln!("FIGURES rapier damping+spring | door_hinge: held-out rmse {:.5} -> {:.5} | found {found:?}", held.rmse_before, held.rmse_after);
+    eprintln!(
+        "FIGURES rapier damping+spring | door_hinge: held-out rmse {:.5} -> {:.5} | found {found:?}",
+        held.rmse_before, held.rmse_after
+    );
     assert_eq!(report.effects.len(), 2, "{found:?}");
     let param = |kind: &str, name: &str| {
-        report.effects.iter().find(|e| e.kind == kind).map(|e| e.params[name]).unwrap_or_else(|| panic!("no {kind}: {found:?}"))
+        report.effects.iter().find(|e| e.kind == kind).map_or_else(|| panic!("no {kind}: {found:?}"), |e| e.params[name])
     };
     for (kind, name, truth) in [("viscous_damping", "damping", 0.25), ("spring", "stiffness", 0.8), ("spring", "rest_position", 0.6)] {
         let got = param(kind, name);
         assert!((got - truth).abs() <= 0.25 * truth, "{kind}.{name} = {got}, true {truth}");
     }
     assert!(held.rmse_before >= 5.0 * held.rmse_after, "held-out rmse {} -> {}", held.rmse_before, held.rmse_after);
+}
+
+#[test]
+fn report_json_has_the_spec_fields_and_is_empty_when_nothing_is_missing() {
+    let model = model();
+    let cfg = GenerateConfig { duration_s: 6.0, noise: 0.001, seed: 3, ..GenerateConfig::default() };
+    // Metadata lines the spec allows: unknown keys, values with colons.
+    let csv = format!("# recorded: 2024-05-01 12:00:03\n# operator: a: b\n{}", generate_recording(&model, &cfg).expect("csv"));
+    let rec = parse_recording(&csv, Path::new("null.csv")).expect("parses");
+    assert_eq!(rec.metadata["recorded"], "2024-05-01 12:00:03");
+    assert_eq!(rec.metadata["operator"], "a: b");
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    let dir = tempfile::tempdir().expect("tempdir");
+    write_outputs(dir.path(), &model, &report).expect("writes");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).expect("report")).expect("json");
+    let keys: Vec<&str> = json.as_object().expect("object").keys().map(String::as_str).collect();
+    // The spec's five fields, plus clearly named extras.
+    for k in ["format", "mismatches", "effects", "fit", "fitted_model"] {
+        assert!(keys.contains(&k), "missing {k}: {keys:?}");
+    }
+    for k in &keys {
+        assert!(["format", "mismatches", "effects", "fit", "fitted_model", "held_out", "noise_sigma", "notes"].contains(k), "{k}");
+    }
+    assert_eq!(json["effects"], serde_json::json!([]));
+    assert_eq!(json["mismatches"], serde_json::json!([]));
+    assert_eq!(json["fitted_model"], "model.fitted.urdf");
+    assert!(dir.path().join("model.fitted.urdf").exists());
+    for joint in ["door_hinge", "drawer_slide"] {
+        let pair = &json["fit"]["per_joint"][joint];
+        assert!(pair["rmse_before"].as_f64().expect("number") < 0.002, "{joint}: {pair}");
+        assert!(pair["rmse_after"].is_number());
+    }
+    assert!(json["fit"]["rmse_before"].is_number() && json["fit"]["rmse_after"].is_number());
 }

@@ -144,6 +144,13 @@ pub fn refine_states(problem: &Problem<'_>, physics: &JointPhysics, states: &[(f
     for (k, span) in problem.segments.iter().enumerate() {
         let t0 = problem.input.time_s[span.start];
         let mut state = out[k];
+        // A segment already at the noise level keeps its state (most segments of a good fit).
+        buf.resize(span.end - span.start + 1, 0.0);
+        simulate(&problem.input, physics, span.start, span.end, state.0, state.1, &mut buf);
+        let z2: f64 = problem.rows[k].iter().map(|&i| ((problem.y[i] - buf[i - span.start]) / problem.sigma).powi(2)).sum();
+        if z2 <= 2.0 * problem.rows[k].len() as f64 {
+            continue;
+        }
         for horizon in HORIZONS_S {
             let rows: Vec<usize> = problem.rows[k].iter().copied().filter(|&i| problem.input.time_s[i] - t0 <= horizon).collect();
             if rows.len() < 3 {
