@@ -34,6 +34,19 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("gap");
     group.sample_size(10);
     group.bench_function("analyze 10 s @ 100 Hz, 2 joints", |b| b.iter(|| analyze(&model, &rec, &config).expect("analyses")));
+    // Two effects on one joint: the selection goes through every pair of kinds.
+    let combined = GenerateConfig {
+        effects: vec![
+            ("door_hinge".into(), TrueEffect::ViscousDamping { damping: 0.2 }),
+            ("door_hinge".into(), TrueEffect::Spring { stiffness: 1.0, rest_position: 1.0 }),
+        ],
+        dropout_fraction: 0.02,
+        ..GenerateConfig::default()
+    };
+    let rec2 = parse_recording(&generate_recording(&model, &combined).expect("recording"), Path::new("bench2.csv")).expect("parses");
+    group.bench_function("analyze 10 s @ 100 Hz, damping + spring on one joint", |b| {
+        b.iter(|| analyze(&model, &rec2, &config).expect("analyses"));
+    });
     group.finish();
 }
 

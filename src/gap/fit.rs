@@ -130,6 +130,84 @@ impl<'a> Problem<'a> {
     }
 }
 
+/// Horizons (s from the segment start) over which [`refine_states`] fits each segment's state in
+/// turn: output error with stops and friction is not convex in the initial state over a whole
+/// segment (a start that hits a stop early loses all gradient), but is over a short stretch.
+const HORIZONS_S: [f64; 4] = [0.15, 0.4, 1.0, f64::INFINITY];
+
+/// Each segment's initial state fitted under `physics` by Levenberg–Marquardt over growing
+/// horizons (continuation), starting from `states`.
+#[must_use]
+pub fn refine_states(problem: &Problem<'_>, physics: &JointPhysics, states: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut out = states.to_vec();
+    let mut buf = Vec::new();
+    for (k, span) in problem.segments.iter().enumerate() {
+        let t0 = problem.input.time_s[span.start];
+        let mut state = out[k];
+        // A segment already at the noise level keeps its state (most segments of a good fit).
+        buf.resize(span.end - span.start + 1, 0.0);
+        simulate(&problem.input, physics, span.start, span.end, state.0, state.1, &mut buf);
+        let z2: f64 = problem.rows[k].iter().map(|&i| ((problem.y[i] - buf[i - span.start]) / problem.sigma).powi(2)).sum();
+        if z2 <= 2.0 * problem.rows[k].len() as f64 {
+            continue;
+        }
+        for horizon in HORIZONS_S {
+            let rows: Vec<usize> = problem.rows[k].iter().copied().filter(|&i| problem.input.time_s[i] - t0 <= horizon).collect();
+            if rows.len() < 3 {
+                continue;
+            }
+            let end = rows[rows.len() - 1];
+            let residual = |s: (f64, f64), buf: &mut Vec<f64>| -> Vec<f64> {
+                buf.resize(end - span.start + 1, 0.0);
+                simulate(&problem.input, physics, span.start, end, s.0, s.1, buf);
+                rows.iter().map(|&i| (problem.y[i] - buf[i - span.start]) / problem.sigma).collect()
+            };
+            let mut r = residual(state, &mut buf);
+            let mut cost: f64 = r.iter().map(|v| v * v).sum();
+            let mut lambda = 1e-3;
+            for _ in 0..15 {
+                let hq = 1e-6 * (1.0 + state.0.abs());
+                let hv = 1e-6 * (1.0 + state.1.abs());
+                let rq = residual((state.0 + hq, state.1), &mut buf);
+                let rv = residual((state.0, state.1 + hv), &mut buf);
+                let (mut a, mut g) = ([0.0; 4], [0.0; 2]);
+                for i in 0..r.len() {
+                    let j = [(rq[i] - r[i]) / hq, (rv[i] - r[i]) / hv];
+                    a[0] += j[0] * j[0];
+                    a[1] += j[0] * j[1];
+                    a[3] += j[1] * j[1];
+                    g[0] -= j[0] * r[i];
+                    g[1] -= j[1] * r[i];
+                }
+                a[2] = a[1];
+                let mut accepted = false;
+                for _ in 0..8 {
+                    let damped = [a[0] * (1.0 + lambda) + 1e-12, a[1], a[2], a[3] * (1.0 + lambda) + 1e-12];
+                    let Some(d) = solve_spd(&damped, &g, 2) else {
+                        lambda *= 10.0;
+                        continue;
+                    };
+                    let trial = (state.0 + d[0], state.1 + d[1]);
+                    let rt = residual(trial, &mut buf);
+                    let ct: f64 = rt.iter().map(|v| v * v).sum();
+                    if ct.is_finite() && ct < cost {
+                        accepted = (cost - ct) > 1e-9 * cost;
+                        (state, r, cost) = (trial, rt, ct);
+                        lambda = (lambda * 0.3).max(1e-9);
+                        break;
+                    }
+                    lambda *= 10.0;
+                }
+                if !accepted {
+                    break;
+                }
+            }
+        }
+        out[k] = state;
+    }
+    out
+}
+
 /// A fitted model of one joint.
 #[derive(Debug, Clone)]
 pub struct FitResult {
@@ -166,8 +244,36 @@ fn unpack(effects: &mut [Effect], x: &[f64], slots: &[(usize, usize)]) {
 }
 
 /// Fits the effects' parameters (those with `free[e][p]`, all when None) and the segment states.
+///
+/// After LM converges, each segment's state is refitted over growing horizons under the fitted
+/// physics ([`refine_states`]); when that finds a better minimum for a segment (one stuck behind
+/// a stop, say), LM runs once more from there.
 #[must_use]
 pub fn fit(
+    problem: &Problem<'_>,
+    init: &[Effect],
+    free: Option<&[Vec<bool>]>,
+    states: Option<Vec<(f64, f64)>>,
+    max_iter: usize,
+) -> FitResult {
+    let first = fit_once(problem, init, free, states, max_iter);
+    if max_iter < 10 || problem.segments.is_empty() {
+        return first;
+    }
+    let physics = JointPhysics::with_effects(problem.joint, &first.effects);
+    let refined = refine_states(problem, &physics, &first.states);
+    let residual = segment_residual(problem, &physics, &refined);
+    let cost: f64 = residual.iter().filter(|r| r.is_finite()).map(|r| (r / problem.sigma).powi(2)).sum();
+    if cost < first.cost * (1.0 - 1e-4) {
+        let second = fit_once(problem, &first.effects, free, Some(refined), max_iter);
+        if second.cost < first.cost {
+            return second;
+        }
+    }
+    first
+}
+
+fn fit_once(
     problem: &Problem<'_>,
     init: &[Effect],
     free: Option<&[Vec<bool>]>,
@@ -185,7 +291,10 @@ pub fn fit(
     let ns = problem.segments.len();
     let m = np + 2 * ns;
     let mut x: Vec<f64> = slots.iter().map(|&(e, p)| effects[e].params[p]).collect();
-    let mut st = states.filter(|s| s.len() == ns).unwrap_or_else(|| problem.data_states());
+    let mut st = states.filter(|s| s.len() == ns).unwrap_or_else(|| {
+        let physics = JointPhysics::with_effects(problem.joint, &effects);
+        refine_states(problem, &physics, &problem.data_states())
+    });
     let n_rows = problem.n_rows();
     let mut buf = Vec::new();
 

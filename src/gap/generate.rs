@@ -98,6 +98,11 @@ impl Default for GenerateConfig {
     }
 }
 
+/// Event code of a velocity reversal under Coulomb friction.
+const REVERSAL: usize = usize::MAX;
+/// Event code of a soft-close zone crossing.
+const ZONE: usize = usize::MAX - 1;
+
 struct TrueJoint {
     inertia: f64,
     mass: f64,
@@ -115,8 +120,21 @@ struct TrueJoint {
 }
 
 impl TrueJoint {
+    /// Whether q lies in the soft-close zone.
+    fn in_zone(&self, q: f64) -> bool {
+        self.soft.is_some_and(|(_, e)| {
+            (q - self.closed_end) * (e - self.closed_end) >= 0.0 && (q - self.closed_end).abs() <= (e - self.closed_end).abs()
+        })
+    }
+
     /// Everything but friction and impacts.
     fn smooth_force(&self, q: f64, v: f64, effort: f64) -> f64 {
+        self.smooth_force_zone(q, v, effort, self.in_zone(q))
+    }
+
+    /// As [`Self::smooth_force`] with the soft-close zone given (a step up to a zone crossing
+    /// keeps the zone it started in, or RK4's last stage would straddle the switch).
+    fn smooth_force_zone(&self, q: f64, v: f64, effort: f64, zone: bool) -> f64 {
         let g = if self.prismatic {
             self.mass * self.gravity.dot(self.axis)
         } else {
@@ -124,18 +142,21 @@ impl TrueJoint {
             self.tilted_axis.dot(d.cross(self.gravity * self.mass))
         };
         let soft = match self.soft {
-            Some((c, e))
-                if (q - self.closed_end) * (e - self.closed_end) >= 0.0 && (q - self.closed_end).abs() <= (e - self.closed_end).abs() =>
-            {
-                c
-            }
+            Some((c, _)) if zone => c,
             _ => 0.0,
         };
         effort + g - self.spring.0 * (q - self.spring.1) - (self.damping + soft) * v
     }
 
     fn rk4(&self, q: f64, v: f64, effort: f64, slide: f64, h: f64) -> (f64, f64) {
-        let acc = |q: f64, v: f64| (self.smooth_force(q, v, effort) - self.friction * slide) / self.inertia;
+        self.rk4_zone(q, v, effort, slide, h, None)
+    }
+
+    /// RK4 step; `zone` fixes the soft-close zone for every stage (None: from each stage's q).
+    fn rk4_zone(&self, q: f64, v: f64, effort: f64, slide: f64, h: f64, zone: Option<bool>) -> (f64, f64) {
+        let acc = |q: f64, v: f64| {
+            (self.smooth_force_zone(q, v, effort, zone.unwrap_or_else(|| self.in_zone(q))) - self.friction * slide) / self.inertia
+        };
         let (k1q, k1v) = (v, acc(q, v));
         let (k2q, k2v) = (v + 0.5 * h * k1v, acc(q + 0.5 * h * k1q, v + 0.5 * h * k1v));
         let (k3q, k3v) = (v + 0.5 * h * k2v, acc(q + 0.5 * h * k2q, v + 0.5 * h * k2v));
@@ -143,12 +164,17 @@ impl TrueJoint {
         (q + h / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q), v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v))
     }
 
-    /// The first event in a step: velocity reversal while sliding, or crossing a stop.
+    /// The first event in a step: velocity reversal while sliding ([`REVERSAL`]), crossing a
+    /// stop (its index), or crossing the soft-close engage position ([`ZONE`]: the damping
+    /// switches, which RK4 must not straddle).
     fn event(&self, q0: f64, q1: f64, v1: f64, slide: f64) -> Option<usize> {
         if slide != 0.0 && v1 * slide < 0.0 {
-            return Some(usize::MAX);
+            return Some(REVERSAL);
         }
-        self.stops.iter().position(|&(p, _, up)| if up { q1 > p && q0 <= p + 1e-12 } else { q1 < p && q0 >= p - 1e-12 })
+        if let Some(i) = self.stops.iter().position(|&(p, _, up)| if up { q1 > p && q0 <= p + 1e-12 } else { q1 < p && q0 >= p - 1e-12 }) {
+            return Some(i);
+        }
+        self.soft.and_then(|(_, e)| ((q0 - e) * (q1 - e) < 0.0).then_some(ZONE))
     }
 
     /// Advances (q, v, slide direction) by `dt` under a constant effort.
@@ -184,17 +210,21 @@ impl TrueJoint {
                     left -= h;
                 }
                 Some(which) => {
-                    // Bisection for the event time.
+                    // Bisection for the event time, in the zone the step starts in.
+                    let zone = Some(self.in_zone(q));
                     let (mut a, mut b) = (0.0, h);
                     for _ in 0..40 {
                         let m = 0.5 * (a + b);
-                        let (qm, vm) = self.rk4(q, v, effort, slide, m);
+                        let (qm, vm) = self.rk4_zone(q, v, effort, slide, m, zone);
                         if self.event(q, qm, vm, slide).is_some() { b = m } else { a = m }
                     }
-                    let (qe, ve) = self.rk4(q, v, effort, slide, b);
+                    let (qe, ve) = self.rk4_zone(q, v, effort, slide, b, zone);
                     left -= b;
-                    if which == usize::MAX {
+                    if which == REVERSAL {
                         (q, v, slide) = (qe, 0.0, 0.0);
+                    } else if which == ZONE {
+                        // Just past the engage position: the next step sees one damping only.
+                        (q, v) = (qe, ve);
                     } else {
                         let (p, e, _) = self.stops[which];
                         q = p;

@@ -1,6 +1,11 @@
 //! Interaction recordings (spec `gap-recording.md` §2): CSV with `# key: value` metadata lines,
 //! one header row, a strictly increasing `time` column, joint positions and efforts, tracked link
 //! poses; empty cells are dropouts. Every rejection names the file, line, column and field.
+//!
+//! Before the header, blank lines are skipped and every line starting with `#` must be
+//! `# key: value` (spec §2; the value may itself hold colons, unknown keys are kept). A `#` line
+//! without `key:` is rejected (line, column 1): the spec describes no free comments, and skipping
+//! it would silently drop a mistyped `# gravity 0 0 -9.81`.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

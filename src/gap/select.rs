@@ -143,17 +143,26 @@ fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind
     let warm_of = |k: EffectKind| warm.iter().find(|e| e.kind == k).cloned();
     let known: Vec<Effect> =
         kinds.iter().filter(|k| matches!(k, EffectKind::EndStop | EffectKind::SoftClose)).filter_map(|&k| warm_of(k)).collect();
-    let mut base = equation_error(problem, derivs, kinds, &known);
+    let mut joint_start = equation_error(problem, derivs, kinds, &known);
+    let mut base = joint_start.clone();
+    let mut warmed = false;
     for e in &mut base {
         if let Some(w) = warm_of(e.kind) {
             *e = w;
+            warmed = true;
         }
     }
-    base.extend(known);
+    base.extend(known.iter().cloned());
+    joint_start.extend(known);
     let used: Vec<f64> = problem.rows.iter().flatten().map(|&i| problem.y[i]).collect();
     let (lo, hi) = used.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     let inertia = problem.input.terms.first().map_or(1.0, |t| t.inertia.max(1e-6));
     let mut starts: Vec<Vec<Effect>> = vec![base.clone()];
+    // Warm starts come from other structures; the joint equation-error solution of these kinds
+    // together is the other natural start (two terms that each half-explain the data).
+    if warmed {
+        starts.push(joint_start);
+    }
     // Equilibrium-like parameters: also start from the middle of the observed range.
     for kind in [EffectKind::Spring, EffectKind::GravityTilt] {
         if kinds.contains(&kind) && warm_of(kind).is_none() {
@@ -166,16 +175,21 @@ fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind
         }
     }
     if kinds.contains(&EffectKind::EndStop) && warm_of(EffectKind::EndStop).is_none() {
-        starts = [(hi, true), (lo, false)]
+        let sides: Vec<(f64, bool)> = [(hi, true), (lo, false)]
             .into_iter()
             .filter(|&(p, up)| {
                 let lim = if up { problem.joint.upper } else { problem.joint.lower };
                 lim.is_none_or(|l| (l - p).abs() > 0.02 * (hi - lo).max(1e-6))
             })
-            .map(|(p, up)| {
-                let mut s = base.clone();
-                s.push(effect(EffectKind::EndStop, vec![p, 0.2], up));
-                s
+            .collect();
+        starts = starts
+            .iter()
+            .flat_map(|s| {
+                sides.iter().map(move |&(p, up)| {
+                    let mut s = s.clone();
+                    s.push(effect(EffectKind::EndStop, vec![p, 0.2], up));
+                    s
+                })
             })
             .collect();
         if starts.is_empty() {
@@ -212,11 +226,34 @@ fn key(kinds: &[EffectKind]) -> Vec<EffectKind> {
     k
 }
 
-/// Greedy forward selection by BIC over `candidates`, at most `max_terms` terms.
+/// Whether a fitted structure is a look-alike of a smaller one: a soft-close zone that holds
+/// (nearly) every observed sample is plain viscous damping, one that holds (nearly) none does
+/// nothing. Such fits are not offered: the smaller structure says the same with fewer words.
+fn degenerate(problem: &Problem<'_>, f: &FitResult) -> bool {
+    let physics = JointPhysics::with_effects(problem.joint, &f.effects);
+    let Some((_, engage)) = physics.soft_close else { return false };
+    let closed = physics.closed_end;
+    // Measured positions held to the model's travel (noise at a stop is at the stop).
+    let (lo, hi) = (physics.lower.unwrap_or(f64::NEG_INFINITY), physics.upper.unwrap_or(f64::INFINITY));
+    let used: Vec<f64> = problem.rows.iter().flatten().map(|&i| problem.y[i].clamp(lo.min(hi), hi)).collect();
+    // Distance from the closed end towards the open side (samples a little past the closed end
+    // count as inside).
+    let reach = (engage - closed).abs();
+    let side = (engage - closed).signum();
+    let inside = used.iter().filter(|&&q| (q - closed) * side <= reach).count();
+    let share = inside as f64 / used.len().max(1) as f64;
+    !(0.02..=0.98).contains(&share)
+}
+
+/// Forward selection by BIC over `candidates`, at most `max_terms` terms: every single kind, then
+/// (while a mismatch is left) every pair of kinds — not only pairs that keep the best single,
+/// since look-alikes (spring vs tilt, damping vs soft close) make the greedy path go astray when
+/// two effects act together — then greedy additions to the best pair.
 ///
-/// Terms are added only while the current model still leaves a mismatch (a stretch of residual
-/// beyond the noise, [`super::locate::mismatch_spans`]): once the residual is noise, a further
-/// term would fit integrator differences, not physics.
+/// A larger structure replaces the current one only when it lowers BIC by [`BIC_MARGIN`] and the
+/// misfit by [`MIN_GAIN`]; terms are added only while the current model still leaves a mismatch
+/// (a stretch of residual beyond the noise, [`super::locate::mismatch_spans`]): once the residual
+/// is noise, a further term would fit integrator differences, not physics.
 #[must_use]
 pub fn select(problem: &Problem<'_>, derivs: &[[f64; 3]], candidates: &[EffectKind], max_terms: usize, min_mismatch: usize) -> Selection {
     let nominal = fit(problem, &[], None, None, MAX_ITER);
@@ -224,29 +261,58 @@ pub fn select(problem: &Problem<'_>, derivs: &[[f64; 3]], candidates: &[EffectKi
     cache.insert(Vec::new(), nominal.clone());
     let mut chosen_kinds: Vec<EffectKind> = Vec::new();
     let mut current = nominal.clone();
-    for round in 0..max_terms {
-        if round > 0 {
-            let physics = JointPhysics::with_effects(problem.joint, &current.effects);
-            let residual = segment_residual(problem, &physics, &current.states);
-            if mismatch_spans(&residual, problem.sigma, min_mismatch).is_empty() {
-                break;
-            }
+    let leaves_mismatch = |f: &FitResult| {
+        let physics = JointPhysics::with_effects(problem.joint, &f.effects);
+        let residual = segment_residual(problem, &physics, &f.states);
+        !mismatch_spans(&residual, problem.sigma, min_mismatch).is_empty()
+    };
+    for size in 1..=max_terms.min(candidates.len()) {
+        if size > 1 && !leaves_mismatch(&current) {
+            break;
         }
-        let trials: Vec<Vec<EffectKind>> =
-            candidates.iter().filter(|k| !chosen_kinds.contains(k)).map(|&k| key(&[chosen_kinds.as_slice(), &[k]].concat())).collect();
-        let fits: Vec<FitResult> = trials.par_iter().map(|kinds| fit_structure(problem, derivs, kinds, &current.effects)).collect();
-        let mut best: Option<(usize, f64)> = None;
-        for (t, (kinds, f)) in trials.iter().zip(&fits).enumerate() {
-            cache.insert(kinds.clone(), f.clone());
-            if best.is_none_or(|(_, b)| f.bic() < b) {
-                best = Some((t, f.bic()));
+        let trials: Vec<Vec<EffectKind>> = if size == 2 {
+            let mut pairs = Vec::new();
+            for (a, &ka) in candidates.iter().enumerate() {
+                for &kb in &candidates[a + 1..] {
+                    pairs.push(key(&[ka, kb]));
+                }
             }
+            pairs
+        } else {
+            candidates.iter().filter(|k| !chosen_kinds.contains(k)).map(|&k| key(&[chosen_kinds.as_slice(), &[k]].concat())).collect()
+        };
+        // Warm starts: the current fit's terms, else each kind's own single fit.
+        let warm_for = |kinds: &[EffectKind]| -> Vec<Effect> {
+            kinds
+                .iter()
+                .filter_map(|k| {
+                    current
+                        .effects
+                        .iter()
+                        .find(|e| e.kind == *k)
+                        .cloned()
+                        .or_else(|| cache.get(&vec![*k]).and_then(|f| f.effects.iter().find(|e| e.kind == *k).cloned()))
+                })
+                .collect()
+        };
+        let jobs: Vec<(Vec<EffectKind>, Vec<Effect>)> =
+            trials.iter().filter(|k| !cache.contains_key(*k)).map(|k| (k.clone(), warm_for(k))).collect();
+        let fits: Vec<FitResult> = jobs.par_iter().map(|(kinds, warm)| fit_structure(problem, derivs, kinds, warm)).collect();
+        for ((kinds, _), f) in jobs.into_iter().zip(fits) {
+            cache.insert(kinds, f);
         }
+        let best = trials
+            .iter()
+            .filter_map(|k| cache.get(k).map(|f| (k, f)))
+            .filter(|(_, f)| !degenerate(problem, f))
+            .min_by(|a, b| a.1.bic().total_cmp(&b.1.bic()));
         match best {
-            Some((t, bic)) if bic < current.bic() - BIC_MARGIN && fits[t].cost < (1.0 - MIN_GAIN) * current.cost => {
-                chosen_kinds.clone_from(&trials[t]);
-                current = fits[t].clone();
+            Some((kinds, f)) if f.bic() < current.bic() - BIC_MARGIN && f.cost < (1.0 - MIN_GAIN) * current.cost => {
+                chosen_kinds.clone_from(kinds);
+                current = f.clone();
             }
+            // No single kind helps on its own: pairs may still (two effects that mask each other).
+            _ if size == 1 => {}
             _ => break,
         }
     }

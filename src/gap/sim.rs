@@ -3,8 +3,11 @@
 //! the full chain because each effect lives on one joint and the recorded neighbours are better
 //! known than simulated ones; it also keeps a fit to a few parameters and a few thousand steps.
 //!
-//! Velocity by implicit Euler with implicit viscous damping and Coulomb friction as a clamped impulse
-//! (so sticking is exact, no chattering), position by the trapezoidal rule, stops as position clamps with restitution.
+//! Velocity by the trapezoidal rule for viscous damping (position forces at the predicted midpoint)
+//! with Coulomb friction as a clamped impulse
+//! (so sticking is exact, no chattering), position by the trapezoidal rule; stops and the soft-close
+//! zone boundary as events located within the step (impact with restitution, then the rest of the
+//! step), position clamps as the fallback.
 
 use super::effects::JointPhysics;
 use super::model::JointTerms;
@@ -23,18 +26,108 @@ pub struct SimInput<'a> {
     pub terms: &'a [JointTerms],
 }
 
-/// One integration step of length h from (q, v) under `effort`.
+/// One integration step of length h from (q, v) under `effort`, with event handling: when the
+/// step crosses a stop (model limit or extra stop) or the soft-close engage position, the step is
+/// cut at the crossing (located by linear interpolation of the trapezoidal position), the impact
+/// or zone change applied there, and the rest of the step integrated from it. Without this, a
+/// restitution-0 stop hit mid-step loses the effort's pull for the rest of the step, and a
+/// damping zone switches a whole step late: errors of O(h) that look like missing physics.
 #[must_use]
 pub fn step(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64, h: f64) -> (f64, f64) {
+    step_events(p, terms, effort, q, v, h, 0)
+}
+
+/// Most events handled within one step before falling back to clamping.
+const MAX_EVENTS: usize = 4;
+
+/// What happens at a crossing.
+#[derive(Debug, Clone, Copy)]
+enum Event {
+    /// A stop at `position`: (restitution, blocks upward).
+    Stop(f64, f64, bool),
+    /// The soft-close zone boundary at `position`.
+    Zone(f64),
+}
+
+fn free_step(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64, h: f64) -> (f64, f64) {
     let inertia = (terms.inertia * p.mass_scale).max(1e-9);
-    let gravity = if terms.gravity_cos == 0.0 && terms.gravity_sin == 0.0 { terms.gravity_const } else { terms.gravity(q) };
-    let force = effort + gravity + p.position_effort(q);
-    let free = v + h * force / inertia;
+    // Position forces at the predicted midpoint and trapezoidal damping: second order, so that a
+    // stiff spring or a strong soft-close damper does not drift from the truth over seconds.
+    let q_mid = q + 0.5 * h * v;
+    let gravity = if terms.gravity_cos == 0.0 && terms.gravity_sin == 0.0 { terms.gravity_const } else { terms.gravity(q_mid) };
+    let force = effort + gravity + p.position_effort(q_mid);
+    // Damping of the zone the step moves into (a start exactly on the engage position counts
+    // the side the joint is heading to).
+    let k = 0.5 * h * p.damping_at(q_mid) / inertia;
+    let free = v * (1.0 - k) + h * force / inertia;
     let friction_dv = h * p.friction / inertia;
-    let damping = p.damping_at(q);
-    let mut v_new = if free.abs() <= friction_dv { 0.0 } else { (free - friction_dv * free.signum()) / (1.0 + h * damping / inertia) };
+    let v_new = if free.abs() <= friction_dv { 0.0 } else { (free - friction_dv * free.signum()) / (1.0 + k) };
     // Trapezoidal position update: exact for piecewise-constant acceleration (the held effort).
-    let mut q_new = q + 0.5 * h * (v + v_new);
+    (q + 0.5 * h * (v + v_new), v_new)
+}
+
+fn step_events(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64, h: f64, depth: usize) -> (f64, f64) {
+    let (q1, v1) = free_step(p, terms, effort, q, v, h);
+    if depth < MAX_EVENTS && h > 1e-9 {
+        // The earliest crossing within the step: fraction s of h.
+        let mut first: Option<(f64, Event)> = None;
+        let mut consider = |position: f64, event: Event, upward: Option<bool>| {
+            let crosses = match upward {
+                Some(true) => q <= position && q1 > position,
+                Some(false) => q >= position && q1 < position,
+                None => (q - position) * (q1 - position) < 0.0,
+            };
+            if crosses {
+                let s = ((position - q) / (q1 - q)).clamp(0.0, 1.0);
+                if first.is_none_or(|(f, _)| s < f) {
+                    first = Some((s, event));
+                }
+            }
+        };
+        if let Some(lo) = p.lower {
+            consider(lo, Event::Stop(lo, 0.0, false), Some(false));
+        }
+        if let Some(hi) = p.upper {
+            consider(hi, Event::Stop(hi, 0.0, true), Some(true));
+        }
+        for s in &p.stops {
+            consider(s.position, Event::Stop(s.position, s.restitution, s.blocks_upward), Some(s.blocks_upward));
+        }
+        if let Some((_, engage)) = p.soft_close {
+            consider(engage, Event::Zone(engage), None);
+        }
+        if let Some((s, event)) = first {
+            let at = s * h;
+            // State at the crossing: the step redone up to it, so that the forces and the damping
+            // zone of the side it starts on act (the full step may have used the other zone's).
+            let ve = free_step(p, terms, effort, q, v, at).1;
+            let (qe, ve) = match event {
+                Event::Stop(position, restitution, up) => {
+                    let into = if up { ve > 0.0 } else { ve < 0.0 };
+                    let mut rebound = if into { -restitution * ve } else { ve };
+                    // Pushed back into the stop, the bounces form a geometric series lasting
+                    // 2|v|/(|a|(1 − e)): when that ends within this step the joint comes to rest.
+                    let a = (effort + terms.gravity(position) + p.position_effort(position)) / (terms.inertia * p.mass_scale).max(1e-9);
+                    let pushed = if up { a > 0.0 } else { a < 0.0 };
+                    if into && pushed && 2.0 * rebound.abs() <= a.abs() * (1.0 - restitution).max(1e-3) * (h - at) {
+                        rebound = 0.0;
+                    }
+                    (position, rebound)
+                }
+                Event::Zone(position) => (position, ve),
+            };
+            // A crossing at the very start (resting on a stop, pushed into it) would repeat:
+            // it is left to the clamps below.
+            if at > 1e-12 || matches!(event, Event::Zone(_)) || (ve - v).abs() > 1e-12 {
+                return step_events(p, terms, effort, qe, ve, h - at, depth + 1);
+            }
+        }
+    }
+    clamp(p, q1, v1)
+}
+
+/// Keeps the state inside the model limits and the extra stops.
+fn clamp(p: &JointPhysics, mut q_new: f64, mut v_new: f64) -> (f64, f64) {
     if let Some(lo) = p.lower
         && q_new < lo
     {
@@ -47,17 +140,14 @@ pub fn step(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64, h
         q_new = hi;
         v_new = v_new.min(0.0);
     }
+    // Only reached while resting on a stop (or after many events in one step): no bounce.
     for s in &p.stops {
         if s.blocks_upward && q_new > s.position {
             q_new = s.position;
-            if v_new > 0.0 {
-                v_new *= -s.restitution;
-            }
+            v_new = v_new.min(0.0);
         } else if !s.blocks_upward && q_new < s.position {
             q_new = s.position;
-            if v_new < 0.0 {
-                v_new *= -s.restitution;
-            }
+            v_new = v_new.max(0.0);
         }
     }
     (q_new, v_new)
