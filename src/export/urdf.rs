@@ -38,7 +38,7 @@ pub enum UrdfError {
     Write(String),
 }
 
-fn sanitize(s: &str) -> String {
+pub(crate) fn sanitize(s: &str) -> String {
     let out: String = s.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect();
     if out.is_empty() { "part".to_owned() } else { out }
 }
@@ -80,20 +80,11 @@ fn geometry(p: &Primitive) -> Vec<(f32, ur::Geometry)> {
     }
 }
 
-/// Where a part's link frame sits in the world: the joint origin of movable parts, else the
-/// primitive centre.
-fn link_origin(scene: &SceneModel, part: &PartModel) -> Vec3 {
-    match scene.joint_of(part.id) {
-        Some(j) if j.kind.is_movable() => j.origin_world,
-        _ => part.primitive.center(),
-    }
-}
-
 /// Builds the URDF robot of a scene.
 #[must_use]
 pub fn scene_urdf_robot(scene: &SceneModel, cfg: &UrdfConfig) -> ur::Robot {
     let names: BTreeMap<PartId, String> = scene.parts.iter().map(|p| (p.id, link_name(scene, p))).collect();
-    let origins: BTreeMap<PartId, Vec3> = scene.parts.iter().map(|p| (p.id, link_origin(scene, p))).collect();
+    let origins: BTreeMap<PartId, Vec3> = scene.parts.iter().map(|p| (p.id, super::tree::link_origin(scene, p))).collect();
     let mut links = vec![ur::Link { name: "world".to_owned(), inertial: ur::Inertial::default(), visual: vec![], collision: vec![] }];
     let mut joints = Vec::new();
     let mut materials = Vec::new();
