@@ -69,7 +69,8 @@ impl Buffers {
         for i in tris.iter().flatten() {
             self.indices.extend_from_slice(&i.to_le_bytes());
         }
-        self.accessors.push(json!({"bufferView": 1, "byteOffset": offset, "componentType": UNSIGNED_INT, "count": tris.len() * 3, "type": "SCALAR"}));
+        self.accessors
+            .push(json!({"bufferView": 1, "byteOffset": offset, "componentType": UNSIGNED_INT, "count": tris.len() * 3, "type": "SCALAR"}));
         Ok(self.accessors.len() - 1)
     }
 }
@@ -92,13 +93,13 @@ pub fn scene_glb(scene: &SceneModel) -> Result<Vec<u8>, GltfError> {
     })];
     let mut root_children = Vec::new();
     for root in &tree.roots {
-        let index = add_node(scene, &tree, root, Vec3::ZERO, &mut nodes, &mut meshes, &mut buffers, &mut materials, &mut material_of)?;
+        let index = add_node(&tree, root, Vec3::ZERO, &mut nodes, &mut meshes, &mut buffers, &mut materials, &mut material_of)?;
         root_children.push(index);
     }
     if !root_children.is_empty() {
         nodes[0]["children"] = json!(root_children);
     }
-    while buffers.vertices.len() % 4 != 0 {
+    while !buffers.vertices.len().is_multiple_of(4) {
         buffers.vertices.push(0);
     }
     let vertex_len = buffers.vertices.len();
@@ -128,7 +129,6 @@ pub fn scene_glb(scene: &SceneModel) -> Result<Vec<u8>, GltfError> {
 /// Adds a part's node (and its children's) whose parent frame is at `parent_origin`; returns its index.
 #[allow(clippy::too_many_arguments)] // one recursive walk over the tree threading the document's lists
 fn add_node(
-    scene: &SceneModel,
     tree: &ExportTree,
     part: &PartModel,
     parent_origin: Vec3,
@@ -167,9 +167,10 @@ fn add_node(
         "name": name,
         "primitives": [{"attributes": {"POSITION": position, "NORMAL": normal}, "indices": indices, "material": material}],
     }));
-    let joint = tree.joint_into.get(&part.id).map(|j| {
-        json!({"type": j.kind.name(), "axis": j.axis_world.to_array(), "lower": j.lower, "upper": j.upper})
-    });
+    let joint = tree
+        .joint_into
+        .get(&part.id)
+        .map(|j| json!({"type": j.kind.name(), "axis": j.axis_world.to_array(), "lower": j.lower, "upper": j.upper}));
     let index = nodes.len();
     let t = origin - parent_origin;
     nodes.push(json!({
@@ -180,7 +181,7 @@ fn add_node(
     }));
     let mut children = Vec::new();
     for child in tree.children_of(part.id) {
-        children.push(add_node(scene, tree, child, origin, nodes, meshes, buffers, materials, material_of)?);
+        children.push(add_node(tree, child, origin, nodes, meshes, buffers, materials, material_of)?);
     }
     if !children.is_empty() {
         nodes[index]["children"] = json!(children);
@@ -191,10 +192,10 @@ fn add_node(
 /// The GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded; left out when empty).
 fn glb(json_text: &str, mut bin: Vec<u8>) -> Result<Vec<u8>, GltfError> {
     let mut json_bytes = json_text.as_bytes().to_vec();
-    while json_bytes.len() % 4 != 0 {
+    while !json_bytes.len().is_multiple_of(4) {
         json_bytes.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json_bytes.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };

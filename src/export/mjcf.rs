@@ -13,7 +13,8 @@
 //! have no MJCF joint attribute; [`dynamics_from_effects`] reports them instead.
 //!
 //! Contacts between parts of one object that the fit leaves touching (a drawer in its body, a
-//! door beside a drawer) are excluded where one of them can move, and so are those between a
+//! door beside a drawer, also a drawer and its own static carcass, which `MuJoCo`'s parent filter
+//! leaves in because the carcass is welded to the world) are excluded where one of them can move, and so are those between a
 //! standing object's moving parts and the part it stands on, so that an exported drawer slides
 //! instead of jamming on its own carcass; contacts between objects stay.
 
@@ -121,7 +122,11 @@ pub fn dynamics_from_effects(scene: &SceneModel, cfg: &UrdfConfig, effects: &[Fi
     let mut warnings = Vec::new();
     for e in effects {
         let Some(&child) = by_name.get(&e.joint) else {
-            warnings.push(Warning::new("export", format!("joint {}", e.joint), format!("{} effect on a joint the scene has no movable joint for; not written", e.kind)));
+            warnings.push(Warning::new(
+                "export",
+                format!("joint {}", e.joint),
+                format!("{} effect on a joint the scene has no movable joint for; not written", e.kind),
+            ));
             continue;
         };
         let Some(joint) = tree.movable_joint(child) else { continue };
@@ -308,10 +313,9 @@ fn write_body(
     let (kind, size) = match prim.kind {
         PrimitiveKind::Cuboid => ("box", vec3(h)),
         PrimitiveKind::Cylinder => ("cylinder", format!("{} {}", num(h.x), num(h.z))),
-        PrimitiveKind::Sphere => ("sphere", num(h.x)),
         // MuJoCo: radius and half-length of the straight part; a capsule with none is a sphere.
         PrimitiveKind::Capsule if h.z - h.x > 1e-6 => ("capsule", format!("{} {}", num(h.x), num(h.z - h.x))),
-        PrimitiveKind::Capsule => ("sphere", num(h.x)),
+        PrimitiveKind::Sphere | PrimitiveKind::Capsule => ("sphere", num(h.x)),
     };
     let mut geom = vec![("name", format!("{name}_geom")), ("type", kind.to_owned()), ("size", size), ("pos", vec3(local_centre))];
     if !is_identity(rot) {
@@ -326,6 +330,8 @@ fn write_body(
 }
 
 /// Body pairs whose contacts are excluded (see the module docs), each as (smaller id, larger id).
+/// Parent and child are listed too: `MuJoCo`'s parent filter does not apply when the parent is
+/// welded to the world, which is exactly a drawer in a standing cabinet.
 fn contact_excludes(scene: &SceneModel, tree: &ExportTree) -> Vec<(PartId, PartId)> {
     // Parts that move: everything under a movable joint.
     let mut moving = BTreeSet::new();
@@ -334,16 +340,9 @@ fn contact_excludes(scene: &SceneModel, tree: &ExportTree) -> Vec<(PartId, PartI
             moving.extend(tree.subtree(part.id));
         }
     }
-    let mut parent_of: BTreeMap<PartId, PartId> = BTreeMap::new();
-    for (p, kids) in &tree.children {
-        for k in kids {
-            parent_of.insert(k.id, *p);
-        }
-    }
-    let adjacent = |a: PartId, b: PartId| parent_of.get(&a) == Some(&b) || parent_of.get(&b) == Some(&a);
     let mut out = BTreeSet::new();
     let mut add = |a: PartId, b: PartId| {
-        if a != b && (moving.contains(&a) || moving.contains(&b)) && !adjacent(a, b) {
+        if a != b && (moving.contains(&a) || moving.contains(&b)) {
             out.insert((a.min(b), a.max(b)));
         }
     };

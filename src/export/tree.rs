@@ -47,10 +47,11 @@ impl<'s> ExportTree<'s> {
             }
         }
         for obj in &scene.objects {
-            if let Some(support) = obj.supported_by_part.filter(|s| scene.part(*s).is_some() && *s != obj.root_part) {
-                if scene.part(obj.root_part).is_some() && !parent.contains_key(&obj.root_part) {
-                    parent.insert(obj.root_part, support);
-                }
+            if let Some(support) = obj.supported_by_part.filter(|s| scene.part(*s).is_some() && *s != obj.root_part)
+                && scene.part(obj.root_part).is_some()
+                && !parent.contains_key(&obj.root_part)
+            {
+                parent.insert(obj.root_part, support);
             }
         }
         // Break cycles: walk up from every part; a part whose walk revisits itself loses its parent.
@@ -104,17 +105,18 @@ impl<'s> ExportTree<'s> {
     pub fn first_non_finite(&self, scene: &SceneModel) -> Option<(PartId, &'static str)> {
         scene.parts.iter().find_map(|part| {
             let prim = &part.primitive;
-            let what = if !prim.size.is_finite() {
-                "size"
-            } else if !prim.center().is_finite() || !prim.rotation().is_finite() {
-                "pose"
-            } else if self.joint_into.get(&part.id).is_some_and(|j| {
-                !j.axis_world.is_finite() || !j.origin_world.is_finite() || !j.lower.is_finite() || !j.upper.is_finite()
-            }) {
-                "joint"
-            } else {
-                return None;
-            };
+            let what =
+                if !prim.size.is_finite() {
+                    "size"
+                } else if !prim.center().is_finite() || !prim.rotation().is_finite() {
+                    "pose"
+                } else if self.joint_into.get(&part.id).is_some_and(|j| {
+                    !j.axis_world.is_finite() || !j.origin_world.is_finite() || !j.lower.is_finite() || !j.upper.is_finite()
+                }) {
+                    "joint"
+                } else {
+                    return None;
+                };
             Some((part.id, what))
         })
     }

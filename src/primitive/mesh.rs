@@ -54,7 +54,13 @@ fn round_profile(r: f32, straight: f32, rings: usize) -> Vec<(f32, f32, f32, f32
         let polar = std::f32::consts::PI * i as f32 / rings as f32;
         let (nr, nz) = (polar.sin(), -polar.cos());
         // Exact zeros at the poles and the equator keep the bounds exact.
-        let nr = if i == 0 || i == rings { 0.0 } else if 2 * i == rings { 1.0 } else { nr };
+        let nr = if i == 0 || i == rings {
+            0.0
+        } else if 2 * i == rings {
+            1.0
+        } else {
+            nr
+        };
         let nz = if 2 * i == rings { 0.0 } else { nz };
         let shift = if 2 * i < rings { -0.5 * straight } else { 0.5 * straight };
         if 2 * i == rings && straight > 0.0 {
@@ -99,7 +105,7 @@ fn lathe(profile: &[(f32, f32, f32, f32)], segments: usize) -> PrimitiveMesh {
 /// sin and cos of 2πj/n with exact 0 and ±1 at the quarter turns (n is a multiple of 4).
 fn exact_sin_cos(j: usize, n: usize) -> (f32, f32) {
     let j = j % n;
-    if j * 4 % n == 0 {
+    if (j * 4).is_multiple_of(n) {
         return match j * 4 / n {
             0 => (0.0, 1.0),
             1 => (1.0, 0.0),
