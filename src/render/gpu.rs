@@ -209,12 +209,7 @@ impl SceneRenderer {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(name),
                 layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &shader,
-                    entry_point: Some(vs),
-                    compilation_options: wgpu::PipelineCompilationOptions::default(),
-                    buffers,
-                },
+                vertex: wgpu::VertexState { module: &shader, entry_point: Some(vs), compilation_options: wgpu::PipelineCompilationOptions::default(), buffers },
                 primitive: wgpu::PrimitiveState { topology, ..Default::default() },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
