@@ -1,5 +1,8 @@
 //! Export round trips: the URDF of an assembled scene parses back with urdf-rs to the same tree,
-//! and loads into rapier3d as a multibody (feature `sim`).
+//! and loads into rapier3d as a multibody (feature `sim`); the MJCF reads back through our own
+//! MJCF importer with the same joints, limits, geometry and fitted dynamics; the glTF reads back
+//! through the `gltf` crate with one node per part along the tree and meshes at the primitives'
+//! bounds.
 
 use std::collections::BTreeMap;
 
@@ -141,4 +144,276 @@ fn urdf_loads_into_rapier_as_a_multibody() {
     for (_, b) in world.bodies.iter() {
         assert!(b.translation().is_finite());
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// MJCF and glTF.
+
+use partscene::export::{
+    DynamicsTable, FittedEffect, dynamics_from_effects, fitted_effects_from_json, joint_name, scene_glb, scene_mjcf, write_scene_files,
+};
+use partscene::math::{Pose, Quat};
+use partscene::primitive::PrimitiveKind;
+
+/// The demo-like scene with every primitive kind and rotated primitives: cylinder legs, a capsule
+/// handle lying along x, a sphere knob, a box turned about z.
+fn mixed_scene() -> SceneModel {
+    let mut s = scene();
+    for p in &mut s.parts {
+        let c = p.primitive.center();
+        p.primitive = match (p.id, p.label.as_str()) {
+            (_, "leg") => Primitive::new(PrimitiveKind::Cylinder, Vec3::new(0.05, 0.05, 0.71), Pose::from_translation(c)),
+            (3, _) => Primitive::new(
+                PrimitiveKind::Capsule,
+                Vec3::new(0.03, 0.03, 0.2),
+                Pose::from_parts(c, Quat::from_rotation_y(std::f32::consts::FRAC_PI_2)),
+            ),
+            (22, _) => Primitive::new(PrimitiveKind::Sphere, Vec3::splat(0.03), Pose::from_translation(c)),
+            (20, _) => Primitive::new(PrimitiveKind::Cuboid, Vec3::new(0.5, 0.35, 0.3), Pose::from_parts(c, Quat::from_rotation_z(0.3))),
+            _ => p.primitive,
+        };
+    }
+    s
+}
+
+fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
+    (a - b).abs().max_element() <= tol
+}
+
+#[test]
+fn mjcf_reads_back_through_our_importer_with_the_same_joints_and_geometry() {
+    for s in [scene(), mixed_scene()] {
+        let text = scene_mjcf(&s, &UrdfConfig::default(), &DynamicsTable::new()).expect("mjcf");
+        let doc = roxmltree::Document::parse(&text).expect("well-formed XML");
+        assert_eq!(doc.root_element().tag_name().name(), "mujoco");
+        let compiler = doc.descendants().find(|n| n.has_tag_name("compiler")).expect("compiler");
+        assert_eq!(compiler.attribute("angle"), Some("radian"));
+        assert_eq!(doc.descendants().filter(|n| n.has_tag_name("body")).count(), s.parts.len());
+        let movable = s.joints.iter().filter(|j| j.kind.is_movable()).count();
+        assert_eq!(doc.descendants().filter(|n| n.has_tag_name("joint")).count(), movable, "fixed joints are welds");
+
+        let asset = partscene::assets::mjcf::parse_mjcf(&text, std::path::Path::new("scene.mjcf.xml")).expect("our importer reads it");
+        assert!(asset.warnings.is_empty(), "{:?}", asset.warnings);
+        assert_eq!(asset.links.len(), s.parts.len() + 1, "world + one body per part");
+        for j in &s.joints {
+            let child = link_name(&s, s.part(j.child).expect("child"));
+            let parent = link_name(&s, s.part(j.parent).expect("parent"));
+            let aj = asset.joints.iter().find(|a| a.child == child).expect("joint into the child body");
+            assert_eq!(aj.parent, parent, "{child}");
+            assert_eq!(aj.kind, j.kind, "{child}");
+            if j.kind.is_movable() {
+                assert_eq!(aj.name, joint_name(&s, s.part(j.child).expect("child")));
+                assert!(aj.axis_world.dot(j.axis_world) > 0.9999, "{child}: axis {} vs {}", aj.axis_world, j.axis_world);
+                assert!(close(aj.origin_world, j.origin_world, 1e-5), "{child}: origin {} vs {}", aj.origin_world, j.origin_world);
+                assert!((aj.lower - j.lower).abs() < 1e-6 && (aj.upper - j.upper).abs() < 1e-6, "{child}: limits");
+            }
+        }
+        // Object roots: on the world, or on the part that supports them.
+        for obj in &s.objects {
+            let root = link_name(&s, s.part(obj.root_part).expect("root"));
+            let aj = asset.joints.iter().find(|a| a.child == root).expect("mount");
+            assert_eq!(aj.kind, JointKind::Fixed);
+            let want = obj.supported_by_part.map_or_else(|| "world".to_owned(), |p| link_name(&s, s.part(p).expect("support")));
+            assert_eq!(aj.parent, want);
+        }
+        // Geometry: each body holds its primitive, same kind, size and placement.
+        for part in &s.parts {
+            let link = asset.link(&link_name(&s, part)).expect("body");
+            assert_eq!(link.geoms.len(), 1);
+            let partscene::assets::GeomShape::Primitive(prim) = &link.geoms[0].shape else { panic!("primitive geom") };
+            assert_eq!(prim.kind, part.primitive.kind, "{}", link.name);
+            assert!(close(prim.size, part.primitive.size, 1e-5), "{}: size {} vs {}", link.name, prim.size, part.primitive.size);
+            assert!(close(prim.center(), part.primitive.center(), 1e-5), "{}: centre", link.name);
+            for (a, b) in prim.axes_world().iter().zip(part.primitive.axes_world()) {
+                assert!(a.dot(b).abs() > 0.9999, "{}: axes", link.name);
+            }
+        }
+    }
+}
+
+#[test]
+fn mjcf_inertia_matches_the_urdf_and_contacts_within_moving_objects_are_excluded() {
+    let s = mixed_scene();
+    let cfg = UrdfConfig::default();
+    let text = scene_mjcf(&s, &cfg, &DynamicsTable::new()).expect("mjcf");
+    let robot = urdf_rs::read_from_string(&scene_urdf(&s, &cfg).expect("urdf")).expect("urdf parses");
+    let doc = roxmltree::Document::parse(&text).expect("xml");
+    for body in doc.descendants().filter(|n| n.has_tag_name("body")) {
+        let name = body.attribute("name").expect("name");
+        let inertial = body.children().find(|n| n.has_tag_name("inertial")).expect("inertial");
+        let mass: f64 = inertial.attribute("mass").expect("mass").parse().expect("number");
+        let link = robot.links.iter().find(|l| l.name == name).expect("same link in the URDF");
+        assert!((mass - link.inertial.mass.value).abs() < 1e-4 * mass.max(1.0), "{name}: {mass} vs {}", link.inertial.mass.value);
+    }
+    let excluded: Vec<(String, String)> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("exclude"))
+        .map(|n| (n.attribute("body1").unwrap_or("").to_owned(), n.attribute("body2").unwrap_or("").to_owned()))
+        .collect();
+    let name = |id| link_name(&s, s.part(id).expect("part"));
+    let has = |a: i64, b: i64| excluded.iter().any(|(x, y)| (*x == name(a) && *y == name(b)) || (*x == name(b) && *y == name(a)));
+    assert!(has(2, 4), "drawer and door of one cabinet");
+    assert!(has(1, 2), "a drawer and its carcass welded to the world (MuJoCo's parent filter skips those)");
+    assert!(has(3, 4), "drawer handle and door");
+    assert!(has(21, 10), "the microwave door and the table top it stands on");
+    assert!(!has(11, 12), "two static legs never collide anyway");
+    assert!(!has(2, 20), "different objects keep their contacts");
+}
+
+#[test]
+fn fitted_gap_effects_become_mjcf_joint_dynamics() {
+    let s = scene();
+    let cfg = UrdfConfig::default();
+    let door = s.part(4).expect("door");
+    let door_joint = joint_name(&s, door);
+    let drawer_joint = joint_name(&s, s.part(2).expect("drawer"));
+    let sidecar = serde_json::json!({
+        "format": "partscene-gap-fitted/1",
+        "model": "scene.urdf",
+        "effects": [
+            {"joint": door_joint, "kind": "viscous_damping", "params": {"damping": 0.4}, "confidence": 0.9},
+            {"joint": door_joint, "kind": "viscous_damping", "params": {"damping": 0.1}},
+            {"joint": door_joint, "kind": "coulomb_friction", "params": {"friction": 0.05}},
+            {"joint": door_joint, "kind": "spring", "params": {"stiffness": 2.0, "rest_position": 0.3}},
+            {"joint": door_joint, "kind": "end_stop", "params": {"position": 1.2, "restitution": 0.2}},
+            {"joint": door_joint, "kind": "mass_scale", "params": {"scale": 1.5}},
+            {"joint": drawer_joint, "kind": "end_stop", "params": {"position": 0.02, "restitution": 0.0}},
+            {"joint": drawer_joint, "kind": "soft_close", "params": {"damping": 3.0, "engage_position": 0.05}},
+            {"joint": "no_such_joint", "kind": "viscous_damping", "params": {"damping": 1.0}},
+        ],
+    })
+    .to_string();
+    let effects: Vec<FittedEffect> = fitted_effects_from_json(&sidecar, "model.fitted.json").expect("sidecar");
+    assert_eq!(effects.len(), 9);
+    let (table, warnings) = dynamics_from_effects(&s, &cfg, &effects);
+    assert_eq!(warnings.len(), 2, "soft close and the unknown joint: {warnings:?}");
+    let d = table[&door_joint];
+    assert!((d.damping - 0.5).abs() < 1e-12 && (d.frictionloss - 0.05).abs() < 1e-12);
+    assert!((d.stiffness - 2.0).abs() < 1e-12 && (d.springref - 0.3).abs() < 1e-12);
+    let door_j = s.joint_of(4).expect("door joint");
+    assert_eq!(d.range, Some([f64::from(door_j.lower), 1.2]), "the stop near the open end narrows the upper limit");
+    // Armature = 0.5 × inertia of door + handle about the hinge line (boxes at 600 kg/m³).
+    let about_hinge: f32 = [4, 5]
+        .iter()
+        .map(|&id| {
+            let p = s.part(id).expect("part").primitive;
+            let m = p.size.x * p.size.y * p.size.z * 600.0;
+            let r = (p.center() - door_j.origin_world).truncate().length();
+            m * (p.size.x * p.size.x + p.size.y * p.size.y) / 12.0 + m * r * r
+        })
+        .sum();
+    assert!((d.armature - 0.5 * f64::from(about_hinge)).abs() < 1e-4 * d.armature, "{} vs {}", d.armature, 0.5 * about_hinge);
+    assert_eq!(table[&drawer_joint].range.map(|r| r[0]), Some(0.02), "the stop near the closed end narrows the lower limit");
+
+    let text = scene_mjcf(&s, &cfg, &table).expect("mjcf");
+    let doc = roxmltree::Document::parse(&text).expect("xml");
+    let joint = doc.descendants().find(|n| n.has_tag_name("joint") && n.attribute("name") == Some(door_joint.as_str())).expect("door");
+    let attr = |k: &str| joint.attribute(k).and_then(|v| v.parse::<f64>().ok());
+    assert_eq!(attr("damping"), Some(0.5));
+    assert_eq!(attr("frictionloss"), Some(0.05));
+    assert_eq!(attr("stiffness"), Some(2.0));
+    assert_eq!(attr("springref"), Some(0.3));
+    assert!(attr("armature").is_some_and(|a| (a - d.armature).abs() < 1e-9));
+    let asset = partscene::assets::mjcf::parse_mjcf(&text, std::path::Path::new("x.xml")).expect("reads back");
+    let aj = asset.joints.iter().find(|j| j.name == door_joint).expect("door joint");
+    assert!((aj.upper - 1.2).abs() < 1e-6);
+    // Without effects nothing is written.
+    let plain = scene_mjcf(&s, &cfg, &DynamicsTable::new()).expect("mjcf");
+    assert!(!plain.contains("damping=") && !plain.contains("armature="));
+
+    assert!(fitted_effects_from_json("{\"format\": \"other\", \"effects\": []}", "x.json").is_err());
+    assert!(fitted_effects_from_json("not json", "x.json").is_err());
+}
+
+/// World (scene, z-up) transform of every node of a glTF document, by node index.
+fn gltf_world(doc: &gltf::Document) -> BTreeMap<usize, glam::Mat4> {
+    let mut out = BTreeMap::new();
+    let mut stack: Vec<(gltf::Node, glam::Mat4)> = doc.default_scene().expect("scene").nodes().map(|n| (n, glam::Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let m = parent * glam::Mat4::from_cols_array_2d(&node.transform().matrix());
+        out.insert(node.index(), m);
+        stack.extend(node.children().map(|c| (c, m)));
+    }
+    out
+}
+
+#[test]
+fn glb_reads_back_with_one_node_per_part_along_the_tree_and_meshes_at_the_primitive_bounds() {
+    let s = mixed_scene();
+    let bytes = scene_glb(&s).expect("glb");
+    let gltf::Gltf { document: doc, blob } = gltf::Gltf::from_slice(&bytes).expect("the gltf crate reads it");
+    let blob = blob.expect("binary chunk");
+    // The crate is built without its `names`/`extras` features: read those from the JSON chunk.
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes")) as usize;
+    let json: serde_json::Value = serde_json::from_slice(&bytes[20..20 + json_len]).expect("JSON chunk");
+    let node_name = |n: &gltf::Node| json["nodes"][n.index()]["name"].as_str().expect("named node").to_owned();
+    assert_eq!(doc.nodes().count(), s.parts.len() + 1, "a y-up root plus one node per part");
+    let root = doc.default_scene().expect("scene").nodes().next().expect("root");
+    assert_eq!(node_name(&root), "partscene");
+    // The root turns z-up into y-up: scene +z becomes glTF +y.
+    let world = gltf_world(&doc);
+    let up = world[&root.index()].transform_vector3(glam::Vec3::Z);
+    assert!(up.abs_diff_eq(glam::Vec3::Y, 1e-6), "{up}");
+    let scene_from_gltf = world[&root.index()].inverse();
+    let mut parent_of: BTreeMap<String, String> = BTreeMap::new();
+    for node in doc.nodes() {
+        for c in node.children() {
+            parent_of.insert(node_name(&c), node_name(&node));
+        }
+    }
+    for j in &s.joints {
+        let child = link_name(&s, s.part(j.child).expect("child"));
+        assert_eq!(parent_of.get(&child), Some(&link_name(&s, s.part(j.parent).expect("parent"))), "{child}");
+    }
+    let mw_root = link_name(&s, s.part(20).expect("microwave"));
+    assert_eq!(parent_of.get(&mw_root), Some(&link_name(&s, s.part(10).expect("top"))));
+    let cabinet_root = link_name(&s, s.part(1).expect("cabinet"));
+    assert_eq!(parent_of.get(&cabinet_root).map(String::as_str), Some("partscene"));
+    // Meshes: in each primitive's own frame the mesh spans exactly ± half its size.
+    for node in doc.nodes().filter(|n| n.index() != root.index()) {
+        let name = node_name(&node);
+        let part = s.parts.iter().find(|p| link_name(&s, p) == name).expect("node named after a part");
+        let mesh = node.mesh().expect("mesh");
+        let prim_gltf = mesh.primitives().next().expect("one primitive");
+        assert!(prim_gltf.material().index().is_some());
+        let reader = prim_gltf.reader(|_| Some(&blob));
+        let m = scene_from_gltf * world[&node.index()];
+        let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        let mut count = 0;
+        for p in reader.read_positions().expect("positions") {
+            let w = m.transform_point3(glam::Vec3::from_array(p));
+            let local = part.primitive.world_from_primitive.inverse_transform_point(Vec3::new(w.x, w.y, w.z));
+            lo = lo.min(local);
+            hi = hi.max(local);
+            count += 1;
+        }
+        assert!(count >= 24);
+        let h = part.primitive.size * 0.5;
+        assert!(close(hi, h, 1e-5) && close(lo, -h, 1e-5), "{name} ({:?}): [{lo}, {hi}] vs ±{h}", part.primitive.kind);
+        let tri = reader.read_indices().expect("indices").into_u32().count();
+        assert_eq!(tri % 3, 0);
+        assert_eq!(json["nodes"][node.index()]["extras"]["part"], part.id);
+    }
+}
+
+#[test]
+fn scene_files_are_all_written_and_a_broken_scene_writes_none() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let files = write_scene_files(dir.path(), &scene(), &UrdfConfig::default()).expect("written");
+    for p in files.all() {
+        assert!(std::fs::metadata(p).expect("exists").len() > 0, "{}", p.display());
+    }
+    assert_eq!(files.mjcf.file_name().and_then(|f| f.to_str()), Some("scene.mjcf.xml"));
+    assert_eq!(files.glb.file_name().and_then(|f| f.to_str()), Some("scene.glb"));
+    let mut broken = scene();
+    broken.parts[3].primitive.size.x = f32::NAN;
+    let other = dir.path().join("broken");
+    let err = write_scene_files(&other, &broken, &UrdfConfig::default()).expect_err("NaN size");
+    assert!(err.to_string().contains("non-finite size"), "{err}");
+    assert!(!other.join("scene.urdf").exists() && !other.join("scene.glb").exists());
+    // An empty scene still gives valid files.
+    let empty = SceneModel::default();
+    let bytes = scene_glb(&empty).expect("glb");
+    assert_eq!(gltf::Gltf::from_slice(&bytes).expect("valid").document.nodes().count(), 1);
+    roxmltree::Document::parse(&scene_mjcf(&empty, &UrdfConfig::default(), &DynamicsTable::new()).expect("mjcf")).expect("xml");
 }

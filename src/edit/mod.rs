@@ -247,9 +247,11 @@ impl Document {
         Some(entry.what)
     }
 
-    /// Writes `scene.urdf` and `scene.json` into `dir`.
+    /// Writes `scene.urdf`, `scene.json`, `scene.mjcf.xml` and `scene.glb` into `dir`; returns
+    /// the paths of the first two (the rest lie beside them).
     pub fn export(&self, dir: &Path) -> Result<[PathBuf; 2], EditError> {
-        Ok(write_scene_files(dir, &self.model, &UrdfConfig::default())?)
+        let files = write_scene_files(dir, &self.model, &UrdfConfig::default())?;
+        Ok([files.urdf, files.json])
     }
 
     /// Checks `cmd` against the current scene and writes it into `pins`.

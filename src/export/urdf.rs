@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use urdf_rs as ur;
 
 use crate::kinematics::JointKind;
-use crate::math::{Pose, Vec3, quat_to_rpy};
+use crate::math::{Pose, Quat, Vec3};
 use crate::model::{PartModel, SceneModel};
 use crate::primitive::{Primitive, PrimitiveKind};
 use crate::scan::PartId;
@@ -38,7 +38,7 @@ pub enum UrdfError {
     Write(String),
 }
 
-fn sanitize(s: &str) -> String {
+pub(crate) fn sanitize(s: &str) -> String {
     let out: String = s.chars().map(|c| if c.is_ascii_alphanumeric() { c.to_ascii_lowercase() } else { '_' }).collect();
     if out.is_empty() { "part".to_owned() } else { out }
 }
@@ -54,8 +54,34 @@ fn v3(v: Vec3) -> ur::Vec3 {
     ur::Vec3([f64::from(v.x), f64::from(v.y), f64::from(v.z)])
 }
 
+/// A unit vector normalised in f64, so readers that check unit length (`PyBullet`) see 1 exactly
+/// enough; +x for a zero vector.
+fn unit_f64(v: Vec3) -> ur::Vec3 {
+    let [x, y, z] = v3(v).0;
+    let n = (x * x + y * y + z * z).sqrt();
+    if n > 1e-12 && n.is_finite() { ur::Vec3([x / n, y / n, z / n]) } else { ur::Vec3([1.0, 0.0, 0.0]) }
+}
+
+/// Roll-pitch-yaw (URDF: R = Rz(yaw)·Ry(pitch)·Rx(roll)) of a rotation, from its matrix in f64,
+/// exact at and near gimbal lock. `math::quat_to_rpy` (glam's `to_euler`) turned a knob whose
+/// axis lies along y (pitch ≈ −90°) by 90° about the wrong axis in `PyBullet`; found by
+/// `scripts/check_sim_clients.py`.
+pub(crate) fn rpy_of(q: Quat) -> [f64; 3] {
+    let q = q.as_dquat().normalize();
+    let m = glam::DMat3::from_quat(q);
+    // Row r, column c of the matrix is m.col(c)[r].
+    let at = |r: usize, c: usize| m.col(c)[r];
+    let pitch = (-at(2, 0)).atan2(at(0, 0).hypot(at(1, 0)));
+    if at(0, 0).hypot(at(1, 0)) > 1e-9 {
+        [at(2, 1).atan2(at(2, 2)), pitch, at(1, 0).atan2(at(0, 0))]
+    } else {
+        // cos(pitch) = 0: only roll − yaw (or roll + yaw) is defined; put it all in roll.
+        [(-at(1, 2)).atan2(at(1, 1)), pitch, 0.0]
+    }
+}
+
 fn pose(xyz: Vec3, rot: crate::math::Quat) -> ur::Pose {
-    ur::Pose { xyz: v3(xyz), rpy: ur::Vec3(quat_to_rpy(rot)) }
+    ur::Pose { xyz: v3(xyz), rpy: ur::Vec3(rpy_of(rot)) }
 }
 
 /// Geometry pieces of a primitive in its own frame: (offset along z, geometry).
@@ -80,20 +106,11 @@ fn geometry(p: &Primitive) -> Vec<(f32, ur::Geometry)> {
     }
 }
 
-/// Where a part's link frame sits in the world: the joint origin of movable parts, else the
-/// primitive centre.
-fn link_origin(scene: &SceneModel, part: &PartModel) -> Vec3 {
-    match scene.joint_of(part.id) {
-        Some(j) if j.kind.is_movable() => j.origin_world,
-        _ => part.primitive.center(),
-    }
-}
-
 /// Builds the URDF robot of a scene.
 #[must_use]
 pub fn scene_urdf_robot(scene: &SceneModel, cfg: &UrdfConfig) -> ur::Robot {
     let names: BTreeMap<PartId, String> = scene.parts.iter().map(|p| (p.id, link_name(scene, p))).collect();
-    let origins: BTreeMap<PartId, Vec3> = scene.parts.iter().map(|p| (p.id, link_origin(scene, p))).collect();
+    let origins: BTreeMap<PartId, Vec3> = scene.parts.iter().map(|p| (p.id, super::tree::link_origin(scene, p))).collect();
     let mut links = vec![ur::Link { name: "world".to_owned(), inertial: ur::Inertial::default(), visual: vec![], collision: vec![] }];
     let mut joints = Vec::new();
     let mut materials = Vec::new();
@@ -154,7 +171,7 @@ pub fn scene_urdf_robot(scene: &SceneModel, cfg: &UrdfConfig) -> ur::Robot {
             origin: pose(origins[&j.child] - origins[&j.parent], crate::math::Quat::IDENTITY),
             parent: ur::LinkName { link: pn.clone() },
             child: ur::LinkName { link: cn.clone() },
-            axis: ur::Axis { xyz: v3(if movable { j.axis_world.normalize_or(Vec3::X) } else { Vec3::X }) },
+            axis: ur::Axis { xyz: unit_f64(if movable { j.axis_world } else { Vec3::X }) },
             limit: ur::JointLimit {
                 lower: if movable { f64::from(j.lower) } else { 0.0 },
                 upper: if movable { f64::from(j.upper) } else { 0.0 },
@@ -202,4 +219,48 @@ pub fn label_color(label: &str) -> [f64; 4] {
     let h = label.bytes().fold(2_166_136_261_u32, |h, b| (h ^ u32::from(b)).wrapping_mul(16_777_619));
     let f = |shift: u32| 0.35 + 0.55 * f64::from((h >> shift) & 0xff) / 255.0;
     [f(0), f(8), f(16), 1.0]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// R = Rz(yaw)·Ry(pitch)·Rx(roll), written out, to check [`rpy_of`] without glam's Euler code.
+    fn matrix_of_rpy([r, p, y]: [f64; 3]) -> glam::DMat3 {
+        let rx = glam::DMat3::from_cols_array(&[1.0, 0.0, 0.0, 0.0, r.cos(), r.sin(), 0.0, -r.sin(), r.cos()]);
+        let ry = glam::DMat3::from_cols_array(&[p.cos(), 0.0, -p.sin(), 0.0, 1.0, 0.0, p.sin(), 0.0, p.cos()]);
+        let rz = glam::DMat3::from_cols_array(&[y.cos(), y.sin(), 0.0, -y.sin(), y.cos(), 0.0, 0.0, 0.0, 1.0]);
+        rz * ry * rx
+    }
+
+    #[test]
+    fn rpy_reproduces_the_rotation_also_at_gimbal_lock() {
+        use rand::Rng;
+        let mut rng = crate::math::rng(7);
+        let mut cases = vec![
+            // The demo knob that glam's to_euler got wrong (axis along −y, pitch ≈ −90°).
+            Quat::from_xyzw(-0.501_262_66, -0.498_734_15, -0.501_262_66, 0.498_734_15),
+            Quat::from_rotation_y(std::f32::consts::FRAC_PI_2),
+            Quat::from_rotation_y(-std::f32::consts::FRAC_PI_2) * Quat::from_rotation_x(0.7),
+            Quat::from_rotation_z(0.3) * Quat::from_rotation_y(std::f32::consts::FRAC_PI_2 - 1e-4),
+            Quat::IDENTITY,
+        ];
+        for _ in 0..200 {
+            cases.push(
+                Quat::from_xyzw(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                )
+                .normalize(),
+            );
+        }
+        for q in cases {
+            let want = glam::DMat3::from_quat(q.as_dquat().normalize());
+            let got = matrix_of_rpy(rpy_of(q));
+            let err = (want - got).to_cols_array().iter().fold(0.0_f64, |a, b| a.max(b.abs()));
+            assert!(err < 1e-6, "{q}: rpy {:?} off by {err}", rpy_of(q));
+        }
+    }
 }

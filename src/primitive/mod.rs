@@ -9,7 +9,10 @@
 mod capsule;
 mod cuboid;
 mod cylinder;
+mod mesh;
 mod sphere;
+
+pub use mesh::PrimitiveMesh;
 
 use serde::{Deserialize, Serialize};
 
