@@ -153,6 +153,18 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
+    /// Write a scene as MJCF with the physics `partscene gap` fitted (damping, frictionloss,
+    /// stiffness/springref, armature, narrowed ranges) on its joints.
+    Mjcf {
+        /// scene.json written by `reconstruct`, `demo` or the editor.
+        #[arg(long)]
+        scene: PathBuf,
+        /// `model.fitted.json` or `report.json` written by `partscene gap` for that scene's URDF.
+        #[arg(long)]
+        effects: Option<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Benchmark every asset under DIR: scan (partial and clean), reconstruct, score against the
     /// asset's own annotation and the object-level baseline; print the tables.
     Bench {
@@ -292,6 +304,7 @@ fn main() -> Result<()> {
             }
             scan_asset_cmd(&asset, &out, &scanner, up.as_deref(), category, seed, cli.json)
         }
+        Command::Mjcf { scene, effects, out } => mjcf_cmd(&scene, effects.as_deref(), &out),
         Command::Bench { dir, markdown, seed } => bench_cmd(&dir, markdown.as_deref(), seed, &cfg, cli.json),
         Command::Gap { model, recording, out } => gap_cmd(model.as_deref(), &recording, &out, cli.json),
     }
@@ -404,7 +417,10 @@ fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, cfg: &PipelineCo
             println!("{}", evaluated.part_level);
             println!("object-level baseline: {}", evaluated.object_level);
             if let Some(dir) = &dir {
-                println!("wrote scan.ply, scan.json, gt.json, scene.urdf, scene.json, eval.json to {}", dir.display());
+                println!(
+                    "wrote scan.ply, scan.json, gt.json, scene.urdf, scene.json, scene.mjcf.xml, scene.glb, eval.json to {}",
+                    dir.display()
+                );
             }
             println!();
         }
@@ -578,5 +594,24 @@ fn gap_cmd(model: Option<&Path>, recording: &Path, out: &Path, json: bool) -> Re
         }
         println!("rmse {:.5} -> {:.5}", report.fit.rmse_before, report.fit.rmse_after);
     }
+    Ok(())
+}
+
+fn mjcf_cmd(scene_path: &Path, effects: Option<&Path>, out: &Path) -> Result<()> {
+    use partscene::export::{DynamicsTable, dynamics_from_effects, read_fitted_effects, scene_mjcf};
+    let scene = read_scene_json(scene_path)?;
+    let cfg = UrdfConfig::default();
+    let dynamics = match effects {
+        Some(path) => {
+            let (table, warnings) = dynamics_from_effects(&scene, &cfg, &read_fitted_effects(path)?);
+            for w in warnings {
+                eprintln!("warning: {w}");
+            }
+            table
+        }
+        None => DynamicsTable::new(),
+    };
+    atomic_write(out, scene_mjcf(&scene, &cfg, &dynamics)?.as_bytes())?;
+    println!("wrote {} ({} joints with fitted dynamics)", out.display(), dynamics.len());
     Ok(())
 }

@@ -133,11 +133,23 @@ pub fn principal_axes(points: &[Vec3]) -> (Vec3, Mat3) {
     (mean.as_vec3(), Mat3::from_cols(x.as_vec3(), y.as_vec3(), z.as_vec3()))
 }
 
-/// Roll-pitch-yaw (URDF convention: R = Rz(yaw)·Ry(pitch)·Rx(roll)) of a rotation.
+/// Roll-pitch-yaw (URDF convention: R = Rz(yaw)·Ry(pitch)·Rx(roll)) of a rotation, from its
+/// matrix in f64, exact at and near gimbal lock. (glam's `to_euler` turned a knob whose axis lies
+/// along y, pitch ≈ −90°, by 90° about the wrong axis in `PyBullet`; found by
+/// `scripts/check_sim_clients.py`.)
 #[must_use]
 pub fn quat_to_rpy(q: Quat) -> [f64; 3] {
-    let (yaw, pitch, roll) = q.as_dquat().to_euler(glam::EulerRot::ZYX);
-    [roll, pitch, yaw]
+    let m = glam::DMat3::from_quat(q.as_dquat().normalize());
+    // Row r, column c of the matrix is m.col(c)[r].
+    let at = |r: usize, c: usize| m.col(c)[r];
+    let cos_pitch = at(0, 0).hypot(at(1, 0));
+    let pitch = (-at(2, 0)).atan2(cos_pitch);
+    if cos_pitch > 1e-9 {
+        [at(2, 1).atan2(at(2, 2)), pitch, at(1, 0).atan2(at(0, 0))]
+    } else {
+        // cos(pitch) = 0: only roll − yaw (or roll + yaw) is defined; put it all in roll.
+        [(-at(1, 2)).atan2(at(1, 1)), pitch, 0.0]
+    }
 }
 
 /// Inverse of [`quat_to_rpy`].

@@ -19,8 +19,8 @@ use crate::kinematics::{
 };
 use crate::math::Vec3;
 use crate::model::{ContactEdge, ObjectModel, PartModel, SceneModel};
-use crate::primitive::{Primitive, PrimitiveKind};
 use crate::observe::{NoObserver, Observer};
+use crate::primitive::{Primitive, PrimitiveKind};
 use crate::refine::{RefineConfig, RefineStats, refine_object_observed};
 use crate::report::Warning;
 use crate::scan::{ObjectId, PartId, Scan, ScanPart};

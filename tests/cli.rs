@@ -70,3 +70,49 @@ fn contact_thresholds_are_validated_and_change_the_result() {
     let default = candidate_edges("default", &[]);
     assert!(strict < default, "strict θd {strict} candidate edges, default {default}");
 }
+
+/// Reality gap to simulator: a recording of a demo door with a damper the reconstruction cannot
+/// know → `partscene gap` finds it → `partscene mjcf --effects` writes it into the MJCF joint.
+#[test]
+fn a_damper_found_by_gap_lands_in_the_mjcf() {
+    use partscene::gap::generate::{GenerateConfig, TrueEffect, generate_recording};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let demo = dir.path().join("demo");
+    let o = partscene(&["demo", "--out", demo.to_str().expect("utf-8")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let urdf = std::fs::read_to_string(demo.join("scene.urdf")).expect("urdf");
+    let model = partscene::gap::parse_model(&urdf, &demo.join("scene.urdf")).expect("model");
+    let robot = urdf_rs::read_from_string(&urdf).expect("urdf parses");
+    let door =
+        robot.joints.iter().find(|j| j.name.contains("door") && matches!(j.joint_type, urdf_rs::JointType::Revolute)).expect("a door");
+    let cfg = GenerateConfig {
+        duration_s: 6.0,
+        effects: vec![(door.name.clone(), TrueEffect::ViscousDamping { damping: 0.4 })],
+        ..GenerateConfig::default()
+    };
+    let csv = format!("# model: demo/scene.urdf\n{}", generate_recording(&model, &cfg).expect("csv"));
+    let rec = dir.path().join("door.csv");
+    std::fs::write(&rec, csv).expect("write");
+    let gap_out = dir.path().join("gap");
+    let o = partscene(&["gap", "--recording", rec.to_str().expect("utf-8"), "--out", gap_out.to_str().expect("utf-8")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mjcf = dir.path().join("fitted.mjcf.xml");
+    let o = partscene(&[
+        "mjcf",
+        "--scene",
+        demo.join("scene.json").to_str().expect("utf-8"),
+        "--effects",
+        gap_out.join("model.fitted.json").to_str().expect("utf-8"),
+        "--out",
+        mjcf.to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&mjcf).expect("mjcf");
+    let doc = roxmltree::Document::parse(&text).expect("MJCF is XML");
+    let joint = doc.descendants().find(|n| n.has_tag_name("joint") && n.attribute("name") == Some(door.name.as_str())).expect("door joint");
+    let damping: f64 = joint.attribute("damping").expect("damping written").parse().expect("number");
+    assert!((damping - 0.4).abs() < 0.1, "damping {damping}");
+    // Every other joint keeps the model's (no) damping.
+    let others = doc.descendants().filter(|n| n.has_tag_name("joint") && n.attribute("name") != Some(door.name.as_str()));
+    assert!(others.clone().count() > 5 && others.filter(|n| n.attribute("damping").is_some()).count() == 0);
+}

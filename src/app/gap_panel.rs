@@ -1,6 +1,6 @@
 //! The reality-gap panel: open a recording of the current scene moving, analyse it against the
 //! scene's URDF in the background, and plot recording vs simulation vs fitted model and the
-//! residual per joint (egui_plot).
+//! residual per joint (`egui_plot`).
 
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, TryRecvError};

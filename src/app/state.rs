@@ -27,7 +27,11 @@ pub enum AppCommand {
     /// Open a scan or the demo (in the background).
     Open(SceneSource),
     /// Open a scan given as bytes (files dropped into the browser): the PLY and its labels JSON.
-    OpenScanBytes { name: String, ply: Vec<u8>, labels: Option<String> },
+    OpenScanBytes {
+        name: String,
+        ply: Vec<u8>,
+        labels: Option<String>,
+    },
     OpenSession(PathBuf),
     SaveSession(PathBuf),
     /// Write scene.urdf and scene.json into a folder.
@@ -324,7 +328,13 @@ impl AppState {
             AppCommand::Export(dir) => {
                 let Some(doc) = &self.doc else { return self.error("nothing to export: no scene is open") };
                 match doc.export(&dir) {
-                    Ok([urdf, json]) => self.info(format!("exported {} and {}", urdf.display(), json.display())),
+                    Ok(files) => self.info(format!(
+                        "exported {}, {}, {} and {}",
+                        files.urdf.display(),
+                        files.json.display(),
+                        files.mjcf.display(),
+                        files.glb.display()
+                    )),
                     Err(e) => self.error(e.to_string()),
                 }
             }

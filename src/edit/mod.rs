@@ -14,7 +14,7 @@ use std::sync::Arc;
 pub use command::{EditCommand, is_pinned, unpin};
 pub use session::{SESSION_FORMAT, SceneSource, Session};
 
-use crate::export::{ExportError, UrdfConfig, write_scene_files};
+use crate::export::{ExportError, SceneFiles, UrdfConfig, write_scene_files};
 use crate::kinematics::JointKind;
 use crate::model::{PartModel, SceneModel};
 use crate::pipeline::{FittedParts, FloorHint, PinnedEdits, PipelineConfig, Progress, assemble, fit_one_part, fit_parts};
@@ -249,9 +249,8 @@ impl Document {
 
     /// Writes `scene.urdf`, `scene.json`, `scene.mjcf.xml` and `scene.glb` into `dir`; returns
     /// the paths of the first two (the rest lie beside them).
-    pub fn export(&self, dir: &Path) -> Result<[PathBuf; 2], EditError> {
-        let files = write_scene_files(dir, &self.model, &UrdfConfig::default())?;
-        Ok([files.urdf, files.json])
+    pub fn export(&self, dir: &Path) -> Result<SceneFiles, EditError> {
+        Ok(write_scene_files(dir, &self.model, &UrdfConfig::default())?)
     }
 
     /// Checks `cmd` against the current scene and writes it into `pins`.

@@ -152,7 +152,8 @@ fn a_saved_session_reopens_to_the_same_scene_and_exports_the_edit() {
     doc.session().save(&dir.path().join("session.json")).unwrap();
     let reopened = Document::open_session(&dir.path().join("session.json"), PipelineConfig::default(), &Quiet).unwrap();
     assert_eq!(reopened.model().joints, doc.model().joints);
-    let [urdf_path, json_path] = reopened.export(&dir.path().join("out")).unwrap();
+    let files = reopened.export(&dir.path().join("out")).unwrap();
+    let (urdf_path, json_path) = (files.urdf, files.json);
     let robot = urdf_rs::read_file(&urdf_path).unwrap();
     let door_link = crate::export::link_name(reopened.model(), reopened.model().part(door).unwrap());
     let joint = robot.joints.iter().find(|j| j.child.link == door_link).unwrap();

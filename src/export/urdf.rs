@@ -62,22 +62,9 @@ fn unit_f64(v: Vec3) -> ur::Vec3 {
     if n > 1e-12 && n.is_finite() { ur::Vec3([x / n, y / n, z / n]) } else { ur::Vec3([1.0, 0.0, 0.0]) }
 }
 
-/// Roll-pitch-yaw (URDF: R = Rz(yaw)·Ry(pitch)·Rx(roll)) of a rotation, from its matrix in f64,
-/// exact at and near gimbal lock. `math::quat_to_rpy` (glam's `to_euler`) turned a knob whose
-/// axis lies along y (pitch ≈ −90°) by 90° about the wrong axis in `PyBullet`; found by
-/// `scripts/check_sim_clients.py`.
+/// Roll-pitch-yaw of a rotation (one place for it: [`crate::math::quat_to_rpy`]).
 pub(crate) fn rpy_of(q: Quat) -> [f64; 3] {
-    let q = q.as_dquat().normalize();
-    let m = glam::DMat3::from_quat(q);
-    // Row r, column c of the matrix is m.col(c)[r].
-    let at = |r: usize, c: usize| m.col(c)[r];
-    let pitch = (-at(2, 0)).atan2(at(0, 0).hypot(at(1, 0)));
-    if at(0, 0).hypot(at(1, 0)) > 1e-9 {
-        [at(2, 1).atan2(at(2, 2)), pitch, at(1, 0).atan2(at(0, 0))]
-    } else {
-        // cos(pitch) = 0: only roll − yaw (or roll + yaw) is defined; put it all in roll.
-        [(-at(1, 2)).atan2(at(1, 1)), pitch, 0.0]
-    }
+    crate::math::quat_to_rpy(q)
 }
 
 fn pose(xyz: Vec3, rot: crate::math::Quat) -> ur::Pose {

@@ -34,7 +34,9 @@ const STAGE_REFINE: i64 = 3;
 pub enum RerunError {
     #[error("cannot write the Rerun recording {path}: {message}")]
     Save { path: String, message: String },
-    #[error("cannot start a Rerun viewer ({message}); is the `rerun` viewer installed (`pip install rerun-sdk` or `cargo install rerun-cli`)?")]
+    #[error(
+        "cannot start a Rerun viewer ({message}); is the `rerun` viewer installed (`pip install rerun-sdk` or `cargo install rerun-cli`)?"
+    )]
     Spawn { message: String },
 }
 
@@ -153,7 +155,7 @@ impl Observer for RerunObserver {
     fn scan(&self, scan: &Scan) {
         self.at(STAGE_SCAN);
         for part in &scan.parts {
-            let points: Vec<[f32; 3]> = part.points.iter().map(|p| p.to_array()).collect();
+            let points: Vec<[f32; 3]> = part.points.iter().map(glam::Vec3::to_array).collect();
             let path = format!("scan/object_{}/part_{}", part.object, part.id);
             let points = rerun::Points3D::new(points).with_colors([color(part.id)]).with_radii([0.003]);
             if let Err(e) = self.rec.log(path.as_str(), &points) {
@@ -181,7 +183,8 @@ impl Observer for RerunObserver {
         let names: Vec<String> = nodes.iter().map(|n| format!("part_{n}")).collect();
         let path = format!("contact_graph/object_{object}");
         let graph_nodes = rerun::GraphNodes::new(names.clone()).with_labels(names).with_colors(nodes.iter().map(|n| color(*n)));
-        let tree: Vec<(String, String)> = edges.iter().filter(|e| e.in_tree).map(|e| (format!("part_{}", e.parent), format!("part_{}", e.child))).collect();
+        let tree: Vec<(String, String)> =
+            edges.iter().filter(|e| e.in_tree).map(|e| (format!("part_{}", e.parent), format!("part_{}", e.child))).collect();
         let candidates: Vec<(String, String)> =
             edges.iter().filter(|e| !e.in_tree).map(|e| (format!("part_{}", e.parent), format!("part_{}", e.child))).collect();
         let results = [
@@ -214,7 +217,8 @@ impl Observer for RerunObserver {
         for j in scene.joints.iter().filter(|j| j.kind != JointKind::Fixed) {
             let object = object_of.get(&j.child).copied().unwrap_or_default();
             let length = scene.part(j.child).map_or(0.3, |p| p.primitive.size.max_element().clamp(0.1, 1.0));
-            let color = if j.kind == JointKind::Revolute { rerun::Color::from_rgb(215, 60, 215) } else { rerun::Color::from_rgb(25, 190, 240) };
+            let color =
+                if j.kind == JointKind::Revolute { rerun::Color::from_rgb(215, 60, 215) } else { rerun::Color::from_rgb(25, 190, 240) };
             let arrow = rerun::Arrows3D::from_vectors([(j.axis_world * length).to_array()])
                 .with_origins([j.origin_world.to_array()])
                 .with_colors([color])

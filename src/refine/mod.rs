@@ -100,7 +100,7 @@ pub fn refine_object_observed(
 ) -> RefineStats {
     let mut stats = RefineStats::default();
     for child in tree.top_down().into_iter().skip(1) {
-        refine_child(prims, tree, cfg, contact_cfg, child, &mut stats);
+        refine_child(prims, tree, *cfg, contact_cfg, child, &mut stats);
         on_step(child, prims);
     }
     stats
@@ -109,7 +109,7 @@ pub fn refine_object_observed(
 fn refine_child(
     prims: &mut BTreeMap<PartId, Primitive>,
     tree: &PartTree,
-    cfg: &RefineConfig,
+    cfg: RefineConfig,
     contact_cfg: &ContactConfig,
     child: PartId,
     stats: &mut RefineStats,
