@@ -94,3 +94,22 @@ impl SceneModel {
         self.parts.iter().filter(move |p| p.object == object)
     }
 }
+
+/// A distinct, stable colour for a part (golden-ratio hues), sRGB 0..1: the same in the editor,
+/// headless renders and Rerun recordings.
+#[must_use]
+pub fn part_color(id: PartId) -> [f32; 3] {
+    let h = (id as f64 * 0.618_033_988_749_895).rem_euclid(1.0) as f32;
+    let (s, v) = (0.55f32, 0.92f32);
+    let i = (h * 6.0).floor();
+    let f = h * 6.0 - i;
+    let (p, q, t) = (v * (1.0 - s), v * (1.0 - f * s), v * (1.0 - (1.0 - f) * s));
+    match i as i32 % 6 {
+        0 => [v, t, p],
+        1 => [q, v, p],
+        2 => [p, v, t],
+        3 => [p, q, v],
+        4 => [t, p, v],
+        _ => [v, p, q],
+    }
+}

@@ -86,20 +86,7 @@ impl RerunObserver {
 }
 
 fn color(id: PartId) -> rerun::Color {
-    // The same golden-ratio hues as the editor, without depending on the GUI.
-    let h = (id as f64 * 0.618_033_988_749_895).rem_euclid(1.0) as f32;
-    let (s, v) = (0.55f32, 0.92f32);
-    let i = (h * 6.0).floor();
-    let f = h * 6.0 - i;
-    let (p, q, t) = (v * (1.0 - s), v * (1.0 - f * s), v * (1.0 - (1.0 - f) * s));
-    let [r, g, b] = match i as i32 % 6 {
-        0 => [v, t, p],
-        1 => [q, v, p],
-        2 => [p, v, t],
-        3 => [p, q, v],
-        4 => [t, p, v],
-        _ => [v, p, q],
-    };
+    let [r, g, b] = crate::model::part_color(id);
     rerun::Color::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8)
 }
 

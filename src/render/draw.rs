@@ -170,26 +170,7 @@ pub struct DrawData {
     pub bounds: Option<(Vec3, Vec3)>,
 }
 
-/// A distinct, stable colour for a part (golden-ratio hues), sRGB 0..1.
-#[must_use]
-pub fn part_color(id: PartId) -> [f32; 3] {
-    let h = (id as f64 * 0.618_033_988_749_895).rem_euclid(1.0) as f32;
-    hsv_to_rgb(h, 0.55, 0.92)
-}
-
-fn hsv_to_rgb(h: f32, s: f32, v: f32) -> [f32; 3] {
-    let i = (h * 6.0).floor();
-    let f = h * 6.0 - i;
-    let (p, q, t) = (v * (1.0 - s), v * (1.0 - f * s), v * (1.0 - (1.0 - f) * s));
-    match i as i32 % 6 {
-        0 => [v, t, p],
-        1 => [q, v, p],
-        2 => [p, v, t],
-        3 => [p, q, v],
-        4 => [t, p, v],
-        _ => [v, p, q],
-    }
-}
+pub use crate::model::part_color;
 
 /// Blue → cyan → green → yellow → red for `t` in 0..1.
 #[must_use]
