@@ -81,7 +81,7 @@ enum Command {
         /// Colour scan points by fit error instead of by part.
         #[arg(long)]
         fit_error: bool,
-        /// Open every movable joint to this fraction of its range (0 = rest, 1 = fully open).
+        /// Open every movable joint this fraction of the way from rest to its farther limit (1 = fully open).
         #[arg(long, default_value_t = 0.0, value_name = "F")]
         open: f32,
     },
@@ -229,6 +229,9 @@ fn observer(cli: &Cli) -> Result<Box<dyn Observer>> {
     #[cfg(feature = "rerun")]
     {
         use partscene::observe::rerun::RerunObserver;
+        if (cli.rerun.is_some() || cli.rerun_spawn) && matches!(cli.command, Some(Command::Demo { count, .. }) if count > 1) {
+            anyhow::bail!("--rerun logs one room per recording: use it with --count 1");
+        }
         if let Some(path) = &cli.rerun {
             return Ok(Box::new(RerunObserver::save(path)?));
         }

@@ -45,10 +45,17 @@ impl GapState {
     /// recording's columns name joints the scene does not have but its `# model:` line names a
     /// URDF, that model is used instead.
     pub fn start(&mut self, scene: Option<&SceneModel>, recording: PathBuf) {
-        let urdf = scene.map(|s| scene_urdf(s, &UrdfConfig::default()));
+        let urdf = match scene.map(|s| scene_urdf(s, &UrdfConfig::default())) {
+            Some(Err(e)) => {
+                self.error = Some(format!("cannot export the current scene to URDF: {e}"));
+                return;
+            }
+            Some(Ok(text)) => Some(text),
+            None => None,
+        };
         let (tx, rx) = std::sync::mpsc::channel();
         let work = move || {
-            let result = run_analysis(urdf.and_then(Result::ok), &recording);
+            let result = run_analysis(urdf, &recording);
             // The receiver is gone only when the app closed.
             let _ = tx.send(result);
         };

@@ -48,6 +48,10 @@ pub struct PartsceneApp {
     web_files: (std::sync::mpsc::Sender<(String, Vec<u8>)>, std::sync::mpsc::Receiver<(String, Vec<u8>)>),
     #[cfg(target_arch = "wasm32")]
     web_pending: std::collections::BTreeMap<String, Vec<u8>>,
+    /// Files of the last drop still being read: the scan opens once all have arrived (a PLY must
+    /// not open before the labels JSON dropped with it).
+    #[cfg(target_arch = "wasm32")]
+    web_awaited: usize,
 }
 
 impl PartsceneApp {
@@ -72,11 +76,13 @@ impl PartsceneApp {
             web_files: std::sync::mpsc::channel(),
             #[cfg(target_arch = "wasm32")]
             web_pending: std::collections::BTreeMap::new(),
+            #[cfg(target_arch = "wasm32")]
+            web_awaited: 0,
         }
     }
 
-    /// One frame of UI; returns the commands it produced, already applied.
-    pub fn frame_ui(&mut self, ui: &mut egui::Ui) -> Vec<AppCommand> {
+    /// One frame of UI; the commands it produced are applied at its end.
+    pub fn frame_ui(&mut self, ui: &mut egui::Ui) {
         if self.state.poll_job() | self.state.gap.poll() {
             ui.ctx().request_repaint();
         }
@@ -116,8 +122,7 @@ impl PartsceneApp {
             gap_panel::gap_ui(ui, &mut state.gap, &mut commands);
         });
         state.gap.open &= open;
-        self.state.apply_all(commands.clone());
-        commands
+        self.state.apply_all(commands);
     }
 }
 
@@ -130,11 +135,16 @@ impl PartsceneApp {
         crate::web::set_title(&title);
         let dropped: Vec<_> = ctx.input(|i| i.raw.dropped_files.clone());
         if !dropped.is_empty() {
+            self.web_awaited += dropped.len();
             crate::web::read_dropped(dropped, self.web_files.0.clone());
         }
         while let Ok((name, bytes)) = self.web_files.1.try_recv() {
             self.web_pending.insert(name, bytes);
+            self.web_awaited = self.web_awaited.saturating_sub(1);
             ctx.request_repaint();
+        }
+        if self.web_awaited > 0 {
+            return;
         }
         let ply = self.web_pending.keys().find(|n| n.to_ascii_lowercase().ends_with(".ply")).cloned();
         if let Some(name) = ply

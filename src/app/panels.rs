@@ -24,9 +24,10 @@ struct DraggedPart(PartId);
 pub struct PanelState {
     pub show_export: bool,
     pub show_session: bool,
-    /// Axis being edited: (part, value) — committed when the drag or typing ends.
-    axis_edit: Option<(PartId, [f32; 3])>,
-    limits_edit: Option<(PartId, [f32; 2])>,
+    /// Axis being edited: (part, document revision, value) — committed when the drag or typing
+    /// ends; dropped when the scene changed meanwhile (undo, flip, another scene).
+    axis_edit: Option<(PartId, u64, [f32; 3])>,
+    limits_edit: Option<(PartId, u64, [f32; 2])>,
 }
 
 /// The name shown for a part everywhere (tree, inspector, graph): label and id.
@@ -83,7 +84,7 @@ pub fn menu_ui(ui: &mut egui::Ui, state: &mut AppState, panels: &mut PanelState,
                 panels.show_session = true;
                 ui.close();
             }
-            if ui.button("Export URDF + scene.json…").clicked() {
+            if ui.button("Export URDF, MJCF, glTF, scene.json…").clicked() {
                 panels.show_export = true;
                 ui.close();
             }
@@ -181,7 +182,7 @@ fn pick_folder() -> Option<PathBuf> {
 pub fn windows_ui(ctx: &egui::Context, state: &mut AppState, panels: &mut PanelState, commands: &mut Vec<AppCommand>) {
     let mut open = panels.show_export;
     egui::Window::new("Export").open(&mut open).collapsible(false).resizable(false).show(ctx, |ui| {
-        ui.label("Writes scene.urdf and scene.json into the folder (atomically).");
+        ui.label("Writes scene.urdf, scene.json, scene.mjcf.xml and scene.glb into the folder (atomically).");
         ui.horizontal(|ui| {
             let label = ui.label("Export folder");
             ui.text_edit_singleline(&mut state.export_dir).labelled_by(label.id);
@@ -396,8 +397,9 @@ pub fn inspector_ui(ui: &mut egui::Ui, state: &AppState, panels: &mut PanelState
     }
     if joint.kind.is_movable() {
         // Axis: edited in a buffer, committed when the drag or typing ends (one undo step).
+        let revision = doc.revision();
         let mut axis = match panels.axis_edit {
-            Some((p, a)) if p == id => a,
+            Some((p, r, a)) if p == id && r == revision => a,
             _ => joint.axis_world.to_array(),
         };
         let mut commit = false;
@@ -411,14 +413,14 @@ pub fn inspector_ui(ui: &mut egui::Ui, state: &AppState, panels: &mut PanelState
                 commands.push(AppCommand::Edit(EditCommand::FlipAxis { child: id }));
             }
         });
-        panels.axis_edit = Some((id, axis));
+        panels.axis_edit = Some((id, revision, axis));
         if commit {
             panels.axis_edit = None;
             commands.push(AppCommand::Edit(EditCommand::SetAxis { child: id, axis_world: glam::Vec3::from_array(axis) }));
         }
         let unit = if joint.kind == JointKind::Revolute { "rad" } else { "m" };
         let mut limits = match panels.limits_edit {
-            Some((p, l)) if p == id => l,
+            Some((p, r, l)) if p == id && r == revision => l,
             _ => [joint.lower, joint.upper],
         };
         let mut commit = false;
@@ -429,7 +431,7 @@ pub fn inspector_ui(ui: &mut egui::Ui, state: &AppState, panels: &mut PanelState
             let r = ui.add(egui::DragValue::new(&mut limits[1]).speed(0.01).prefix("upper "));
             commit |= r.drag_stopped() || r.lost_focus();
         });
-        panels.limits_edit = Some((id, limits));
+        panels.limits_edit = Some((id, revision, limits));
         if commit {
             panels.limits_edit = None;
             commands.push(AppCommand::Edit(EditCommand::SetLimits { child: id, lower: limits[0], upper: limits[1] }));

@@ -34,7 +34,8 @@ pub enum AppCommand {
     },
     OpenSession(PathBuf),
     SaveSession(PathBuf),
-    /// Write scene.urdf and scene.json into a folder.
+    /// Write scene.urdf, scene.json, scene.mjcf.xml and scene.glb into a folder (downloads of
+    /// scene.urdf and scene.json in the browser).
     Export(PathBuf),
     /// Analyse a recording of the scene moving (reality gap) in the background.
     AnalyseRecording(PathBuf),
@@ -217,6 +218,9 @@ impl AppState {
                 self.info(format!("opened {}: {parts} parts, {joints} movable joints", doc.source().title()));
                 self.doc = Some(doc);
                 self.selected = None;
+                self.hovered = None;
+                self.last_hovered = None;
+                self.gap.outcome = None;
                 self.joint_q.clear();
                 self.needs_framing = true;
                 self.touch();
@@ -254,6 +258,9 @@ impl AppState {
                 let Some(doc) = &mut self.doc else { return };
                 match doc.apply(edit) {
                     Ok(()) => {
+                        // The edited joint's preview position may mean something else now (another
+                        // type, flipped axis, new limits): it goes back to rest.
+                        self.joint_q.remove(&edit.part());
                         let stats = doc.last_refine();
                         let text = format!(
                             "{} · refinement re-ran: {} parts rotated (max {:.1}°), {} moved (max {:.1} cm)",
@@ -374,10 +381,17 @@ impl AppState {
     }
 
     fn after_edit(&mut self) {
-        // Joint positions of joints that are gone or no longer movable are dropped.
+        // Joint positions of joints that are gone or no longer movable are dropped, the others
+        // kept within their (possibly new) limits.
         if let Some(doc) = &self.doc {
             let model = doc.model();
-            self.joint_q.retain(|child, _| model.joint_of(*child).is_some_and(|j| j.kind.is_movable()));
+            self.joint_q.retain(|child, q| match model.joint_of(*child) {
+                Some(j) if j.kind.is_movable() => {
+                    *q = q.clamp(j.lower.min(j.upper), j.upper.max(j.lower));
+                    true
+                }
+                _ => false,
+            });
         }
         self.touch();
         self.write_autosave();
@@ -399,6 +413,10 @@ impl AppState {
     /// Saves the session to the autosave file after every edit (pins are small), or removes it
     /// when nothing is pinned. A clean exit removes it ([`Self::on_exit`]).
     fn write_autosave(&mut self) {
+        // A crash's autosave stays untouched until the user recovers or discards it.
+        if self.autosave.recoverable.is_some() {
+            return;
+        }
         let (Some(path), Some(doc)) = (self.autosave.path.clone(), &self.doc) else { return };
         if *doc.pins() == PinnedEdits::default() {
             self.remove_autosave();
@@ -417,8 +435,10 @@ impl AppState {
         }
     }
 
-    /// A clean exit: nothing to recover next time.
+    /// A clean exit: nothing to recover next time (unless a crash's autosave is still unanswered).
     pub fn on_exit(&self) {
-        self.remove_autosave();
+        if self.autosave.recoverable.is_none() {
+            self.remove_autosave();
+        }
     }
 }

@@ -8,12 +8,12 @@ use eframe::egui_wgpu;
 use glam::Vec2;
 
 use super::state::{AppCommand, AppState};
-use crate::render::{DrawData, FrameParams, SceneRenderer, SceneView, pick_part, scene_draw_data};
+use crate::render::{DrawData, DrawOptions, FrameParams, SceneRenderer, SceneView, pick_part, scene_draw_data};
 
 /// Draw data of the last frame, rebuilt only when what it shows changes.
 #[derive(Default)]
 pub struct ViewCache {
-    key: Option<(u64, Option<i64>, Option<i64>, String)>,
+    key: Option<(u64, Option<i64>, Option<i64>, DrawOptions)>,
     data: Arc<DrawData>,
     generation: u64,
 }
@@ -22,7 +22,7 @@ impl ViewCache {
     /// The draw data for the current state (rebuilt if stale).
     pub fn data(&mut self, state: &AppState) -> Arc<DrawData> {
         let highlighted = state.hovered.or(state.last_hovered);
-        let key = (state.view_generation, state.selected, highlighted, format!("{:?}", state.options));
+        let key = (state.view_generation, state.selected, highlighted, state.options);
         if self.key.as_ref() != Some(&key) {
             let motions = state.motions();
             let data = match &state.doc {

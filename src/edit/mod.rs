@@ -208,6 +208,11 @@ impl Document {
     /// Applies a correction: checks it, pins it, and re-runs the relational stages.
     /// A refused edit changes nothing.
     pub fn apply(&mut self, cmd: EditCommand) -> Result<(), EditError> {
+        if let EditCommand::SetPrimitiveKind { part, kind } = cmd
+            && let Some(Err(w)) = self.kind_fit(part, kind)
+        {
+            return Err(EditError::Refused(format!("a {} does not fit part {part}: {}", kind.name(), w.message)));
+        }
         let before = self.pins.clone();
         let mut pins = before.clone();
         self.pin(&mut pins, cmd)?;
@@ -315,13 +320,19 @@ impl Document {
         Ok(())
     }
 
+    /// The fit of `part` as a `kind` (cached), or `None` when the scan has no such part.
+    fn kind_fit(&mut self, part: PartId, kind: PrimitiveKind) -> Option<&Result<PartModel, Warning>> {
+        let scan_part = self.scan.part(part)?;
+        Some(self.kind_fits.entry((part, kind)).or_insert_with(|| fit_one_part(scan_part, &self.config.fit, Some(kind))))
+    }
+
     /// The fitted parts under the current pins: cached automatic fits, with pinned kinds re-fitted
     /// (once per part and kind).
     fn fitted(&mut self) -> FittedParts {
         let mut fitted = self.auto_fit.clone();
-        for (&part, &kind) in &self.pins.primitive_kind {
-            let Some(scan_part) = self.scan.part(part) else { continue };
-            let fit = self.kind_fits.entry((part, kind)).or_insert_with(|| fit_one_part(scan_part, &self.config.fit, Some(kind)));
+        let pinned: Vec<(PartId, PrimitiveKind)> = self.pins.primitive_kind.iter().map(|(p, k)| (*p, *k)).collect();
+        for (part, kind) in pinned {
+            let Some(fit) = self.kind_fit(part, kind) else { continue };
             match fit {
                 Ok(model) => {
                     if let Some(slot) = fitted.parts.iter_mut().find(|p| p.id == part) {

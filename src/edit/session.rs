@@ -49,9 +49,19 @@ impl Session {
         Self { format: SESSION_FORMAT.to_owned(), source, pins }
     }
 
-    /// Writes the session atomically (a crash mid-write leaves the old file).
+    /// Writes the session atomically (a crash mid-write leaves the old file). A scan path
+    /// relative to the working directory is written absolute, so the session (and the autosave,
+    /// which lives elsewhere) finds the scan from anywhere.
     pub fn save(&self, path: &Path) -> Result<(), EditError> {
-        let text = serde_json::to_string_pretty(self).map_err(|e| EditError::Session { path: path.to_owned(), message: e.to_string() })?;
+        let mut session = self.clone();
+        if let SceneSource::Scan { path: scan } = &mut session.source
+            && scan.is_relative()
+            && let Ok(absolute) = std::path::absolute(&*scan)
+        {
+            *scan = absolute;
+        }
+        let text =
+            serde_json::to_string_pretty(&session).map_err(|e| EditError::Session { path: path.to_owned(), message: e.to_string() })?;
         atomic_write(path, text.as_bytes()).map_err(|e| EditError::Io { path: path.to_owned(), message: e.to_string() })
     }
 
@@ -87,11 +97,18 @@ mod tests {
         let mut pins = PinnedEdits::default();
         pins.parent.insert(7, 3);
         pins.joint_kind.insert(7, JointKind::Revolute);
+        // Saving writes a scan path given relative to the working directory as absolute ...
         let session = Session::new(SceneSource::Scan { path: PathBuf::from("room.ply") }, pins.clone());
         let path = dir.path().join("s.json");
         session.save(&path).unwrap();
         let back = Session::load(&path).unwrap();
         assert_eq!(back.pins, pins);
+        assert_eq!(back.source, SceneSource::Scan { path: std::env::current_dir().unwrap().join("room.ply") });
+        // ... and a relative path written by hand is taken beside the session file.
+        let text = std::fs::read_to_string(&path).unwrap();
+        let cwd = std::env::current_dir().unwrap().join("room.ply").display().to_string();
+        std::fs::write(&path, text.replace(&serde_json::to_string(&cwd).unwrap(), "\"room.ply\"")).unwrap();
+        let back = Session::load(&path).unwrap();
         assert_eq!(back.source, SceneSource::Scan { path: dir.path().join("room.ply") });
     }
 

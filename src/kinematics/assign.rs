@@ -131,7 +131,7 @@ pub fn outward_direction(parent: &Primitive, child: &Primitive, handle: Option<V
             if let Some(h) = handle {
                 // A handle stands proud of the child's front face: its offset along n, measured
                 // against the child's own half thickness along n (noise-sized offsets count little).
-                let reach = 0.5 * extent_along(child, n) + 0.01;
+                let reach = 0.5 * child.extent_along(n) + 0.01;
                 score += 0.5 * ((h - child.center()).dot(n) / reach).clamp(-1.0, 1.0);
             }
             if score > best.0 + 1e-6 {
@@ -185,14 +185,14 @@ pub fn estimate_joint(
                 .unwrap_or(axes[0]);
             let axis = if axis.dot(in_plane) < 0.0 { -axis } else { axis };
             joint.axis_world = axis;
-            joint.upper = (2.0 * in_plane.dot(axis)).max(0.0).min(extent_along(parent, axis));
+            joint.upper = (2.0 * in_plane.dot(axis)).max(0.0).min(parent.extent_along(axis));
         }
         JointKind::Prismatic if is_button(child_label) => {
             joint.axis_world = -out;
             joint.upper = cfg.button_travel_m;
         }
         JointKind::Prismatic => {
-            let depth = extent_along(parent, out);
+            let depth = parent.extent_along(out);
             joint.upper = cfg.drawer_travel * depth;
         }
         JointKind::Revolute if is_rotary_knob(child_label) => {
@@ -251,7 +251,7 @@ pub fn joint_from_handle(parent: &Primitive, child: &Primitive, handle: Vec3) ->
     }
     let parent_half = parent.size * 0.5;
     let parent_front = parent.center().dot(n) + parent_half[k];
-    let child_front = child.center().dot(n) + 0.5 * extent_along(child, n);
+    let child_front = child.center().dot(n) + 0.5 * child.extent_along(n);
     if (child_front - parent_front).abs() > (0.1 * parent.size[k]).max(0.03) {
         return None;
     }
@@ -270,11 +270,6 @@ pub fn joint_from_handle(parent: &Primitive, child: &Primitive, handle: Vec3) ->
 }
 
 /// Full extent of a primitive along a world direction.
-fn extent_along(prim: &Primitive, dir: Vec3) -> f32 {
-    let axes = prim.axes_world();
-    (0..3).map(|k| axes[k].dot(dir).abs() * prim.size[k]).sum()
-}
-
 /// Hinge line of a door: direction (signed so a positive angle opens outward) and a pivot point.
 fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, handle: Option<Vec3>) -> (Vec3, Vec3) {
     let axes = door.axes_world();

@@ -5,7 +5,8 @@
 //! Entities: `scan/object_{o}/part_{p}` (points), `primitives/object_{o}/part_{p}` (one box,
 //! cylinder, ellipsoid or capsule), `contact_graph/object_{o}` (graph nodes and directed edges;
 //! the tree's edges are the kept ones), `contact_edges/object_{o}` (3D lines between part centres),
-//! `joints/object_{o}/part_{p}` (an arrow along the axis at the pivot), `floor`.
+//! `joints/object_{o}/part_{p}` (an arrow along the axis at the pivot), `refinement/object_{o}`
+//! (a text log per step).
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -242,6 +242,13 @@ impl Primitive {
         (self.center() - ext, self.center() + ext)
     }
 
+    /// Width of the primitive's box along a world direction `dir` (unit), metres.
+    #[must_use]
+    pub fn extent_along(&self, dir: Vec3) -> f32 {
+        let axes = self.axes_world();
+        (0..3).map(|k| axes[k].dot(dir).abs() * self.size[k]).sum()
+    }
+
     /// The 8 corners of the primitive's bounding box, world frame.
     #[must_use]
     pub fn box_corners(&self) -> [Vec3; 8] {

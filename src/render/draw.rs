@@ -294,7 +294,7 @@ fn push_joint(out: &mut DrawData, j: &Joint, posed: &BTreeMap<PartId, Primitive>
         JointKind::Revolute => {
             // The hinge line through the pivot, as long as the part along it, and a ball at the pivot.
             let centre_on_axis = origin + axis * (child.center() - origin).dot(axis);
-            let half = 0.5 * extent_along(child, axis).max(0.05) + 0.03;
+            let half = 0.5 * child.extent_along(axis).max(0.05) + 0.03;
             let c = [REVOLUTE[0], REVOLUTE[1], REVOLUTE[2], 1.0];
             out.opaque.push_rod(centre_on_axis - axis * half, centre_on_axis + axis * half, rod, c);
             out.opaque.push_ball(centre_on_axis, rod * 2.5, c);
@@ -337,28 +337,24 @@ fn push_joint(out: &mut DrawData, j: &Joint, posed: &BTreeMap<PartId, Primitive>
     }
 }
 
-fn extent_along(prim: &Primitive, dir: Vec3) -> f32 {
-    let [ax, ay, az] = prim.axes_world();
-    prim.size.x * ax.dot(dir).abs() + prim.size.y * ay.dot(dir).abs() + prim.size.z * az.dot(dir).abs()
-}
-
 /// A 0.5 m grid on the floor under the scene.
 fn push_floor(out: &mut DrawData, lo: Vec3, hi: Vec3, floor_z: f32) {
+    // Counted lines (at most 400 each way): a float loop never ends where x + step == x.
     let step = 0.5f32;
     let (x0, x1) = ((lo.x / step).floor() * step - step, (hi.x / step).ceil() * step + step);
     let (y0, y1) = ((lo.y / step).floor() * step - step, (hi.y / step).ceil() * step + step);
     let color = [110, 110, 118, 255];
-    let mut x = x0;
-    while x <= x1 + 1e-3 {
+    let nx = (((x1 - x0) / step).round() as usize).min(400);
+    let ny = (((y1 - y0) / step).round() as usize).min(400);
+    for i in 0..=nx {
+        let x = x0 + i as f32 * step;
         out.lines.push(LineVertex { position_world: [x, y0, floor_z], color });
         out.lines.push(LineVertex { position_world: [x, y1, floor_z], color });
-        x += step;
     }
-    let mut y = y0;
-    while y <= y1 + 1e-3 {
+    for i in 0..=ny {
+        let y = y0 + i as f32 * step;
         out.lines.push(LineVertex { position_world: [x0, y, floor_z], color });
         out.lines.push(LineVertex { position_world: [x1, y, floor_z], color });
-        y += step;
     }
 }
 

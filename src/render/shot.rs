@@ -20,7 +20,8 @@ pub struct ShotOptions {
     pub view: ViewPreset,
     pub size_px: [u32; 2],
     pub draw: DrawOptions,
-    /// Every movable joint opened to this fraction of its range (0 = at rest).
+    /// Every movable joint opened to this fraction of the way from rest (0) to the end of its
+    /// travel farther from rest.
     pub open_fraction: f32,
 }
 
@@ -87,8 +88,13 @@ pub fn render_file(input: &Path, options: &ShotOptions, config: &PipelineConfig)
 /// Renders a scene (and its scan's points, if given) on `gpu`.
 pub fn render_model(gpu: &Headless, model: &SceneModel, scan: Option<&Scan>, options: &ShotOptions) -> Result<RgbaImage, RenderError> {
     let f = options.open_fraction;
-    let joint_q: BTreeMap<_, _> =
-        model.joints.iter().filter(|j| j.kind.is_movable() && f != 0.0).map(|j| (j.child, j.lower + f * (j.upper - j.lower))).collect();
+    // From rest (0) towards the end of travel farther from it: limits may be [0, u] or [-u, 0].
+    let joint_q: BTreeMap<_, _> = model
+        .joints
+        .iter()
+        .filter(|j| j.kind.is_movable() && f != 0.0)
+        .map(|j| (j.child, f * if j.upper.abs() >= j.lower.abs() { j.upper } else { j.lower }))
+        .collect();
     let motions = crate::kinematics::part_motions(&model.joints, &joint_q);
     let view = SceneView { model, scan, motions: &motions, selected: None, hovered: None };
     let data = scene_draw_data(&view, &options.draw);

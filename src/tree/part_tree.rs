@@ -237,15 +237,8 @@ fn grip_touches_a_part_set_into(
 /// Whether every corner of `inner`'s box lies inside `outer`'s box grown by `margin_m`.
 fn lies_within(inner: &Primitive, outer: &Primitive, margin_m: f32) -> bool {
     let half_outer = outer.size * 0.5 + crate::math::Vec3::splat(margin_m);
-    let half_inner = inner.size * 0.5;
-    (0..8).all(|k| {
-        let sign = crate::math::Vec3::new(
-            if k & 1 == 0 { -1.0 } else { 1.0 },
-            if k & 2 == 0 { -1.0 } else { 1.0 },
-            if k & 4 == 0 { -1.0 } else { 1.0 },
-        );
-        let corner_world = inner.world_from_primitive.transform_point(sign * half_inner);
-        let local = outer.world_from_primitive.inverse_transform_point(corner_world);
+    inner.box_corners().iter().all(|corner_world| {
+        let local = outer.world_from_primitive.inverse_transform_point(*corner_world);
         local.abs().cmple(half_outer).all()
     })
 }
