@@ -576,9 +576,9 @@ fn render_cmd(
 fn gap_cmd(model: Option<&Path>, recording: &Path, out: &Path, json: bool) -> Result<()> {
     use partscene::gap;
     let rec = gap::read_recording(recording)?;
-    let model_path = match (model, rec.metadata.get("model")) {
+    let model_path = match (model, rec.named_model_path()) {
         (Some(m), _) => m.to_path_buf(),
-        (None, Some(rel)) => recording.parent().unwrap_or(Path::new(".")).join(rel),
+        (None, Some(named)) => named,
         (None, None) => anyhow::bail!("no --model given and {} has no `# model:` line", recording.display()),
     };
     let model = gap::load_model(&model_path)?;

@@ -113,3 +113,14 @@ pub fn part_color(id: PartId) -> [f32; 3] {
         _ => [v, p, q],
     }
 }
+
+/// The colour of a joint type wherever joints are drawn (editor, headless renders, Rerun), sRGB
+/// 0..1: revolute magenta, prismatic cyan, fixed light grey.
+#[must_use]
+pub const fn joint_kind_color(kind: crate::kinematics::JointKind) -> [f32; 3] {
+    match kind {
+        crate::kinematics::JointKind::Revolute => [0.85, 0.24, 0.85],
+        crate::kinematics::JointKind::Prismatic => [0.1, 0.75, 0.95],
+        crate::kinematics::JointKind::Fixed => [0.78, 0.78, 0.78],
+    }
+}

@@ -99,8 +99,7 @@ impl GapState {
 fn run_analysis(scene_urdf: Option<String>, recording: &Path) -> Result<GapOutcome, String> {
     let rec = read_recording(recording).map_err(|e| e.to_string())?;
     let named_model = || -> Option<(GapModel, String)> {
-        let rel = rec.metadata.get("model")?;
-        let path = recording.parent().unwrap_or(Path::new(".")).join(rel);
+        let path = rec.named_model_path()?;
         load_model(&path).ok().map(|m| (m, path.display().to_string()))
     };
     let scene_model = scene_urdf.and_then(|text| parse_model(&text, Path::new("current scene (scene.urdf)")).ok());

@@ -41,11 +41,7 @@ fn color32(rgb: [f32; 3]) -> Color32 {
 }
 
 fn kind_color(kind: JointKind) -> Color32 {
-    match kind {
-        JointKind::Fixed => Color32::from_gray(200),
-        JointKind::Prismatic => Color32::from_rgb(25, 190, 240),
-        JointKind::Revolute => Color32::from_rgb(215, 60, 215),
-    }
+    color32(crate::model::joint_kind_color(kind))
 }
 
 fn children_map(model: &SceneModel) -> BTreeMap<PartId, Vec<PartId>> {

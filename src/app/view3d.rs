@@ -8,47 +8,59 @@ use eframe::egui_wgpu;
 use glam::Vec2;
 
 use super::state::{AppCommand, AppState};
-use crate::render::{DrawData, DrawOptions, FrameParams, SceneRenderer, SceneView, pick_part, scene_draw_data};
+use crate::render::{DrawData, DrawOptions, FrameParams, PointInstance, SceneRenderer, SceneView, pick_part, scene_geometry, scene_points};
 
-/// Draw data of the last frame, rebuilt only when what it shows changes.
+/// Draw data of the last frame, rebuilt only when what it shows changes. The scan points (up
+/// to 400k) are kept apart: hovering changes the highlight, not the points.
 #[derive(Default)]
 pub struct ViewCache {
     key: Option<(u64, Option<i64>, Option<i64>, DrawOptions)>,
     data: Arc<DrawData>,
     generation: u64,
+    points_key: Option<(u64, Option<i64>, DrawOptions)>,
+    points: Arc<Vec<PointInstance>>,
+    points_generation: u64,
 }
 
 impl ViewCache {
-    /// The draw data for the current state (rebuilt if stale).
-    pub fn data(&mut self, state: &AppState) -> Arc<DrawData> {
+    /// The draw data for the current state (rebuilt if stale): everything but the points, and
+    /// the points. `data().bounds` frames the scene.
+    pub fn data(&mut self, state: &AppState) -> (Arc<DrawData>, Arc<Vec<PointInstance>>) {
         let highlighted = state.hovered.or(state.last_hovered);
         let key = (state.view_generation, state.selected, highlighted, state.options);
-        if self.key.as_ref() != Some(&key) {
-            let motions = state.motions();
-            let data = match &state.doc {
-                Some(doc) => {
-                    let view = SceneView {
-                        model: doc.model(),
-                        scan: Some(doc.scan()),
-                        motions: &motions,
-                        selected: state.selected,
-                        hovered: highlighted,
-                    };
-                    scene_draw_data(&view, &state.options)
-                }
-                None => DrawData::default(),
-            };
-            self.data = Arc::new(data);
+        let points_key = (state.view_generation, state.selected, state.options);
+        let stale = self.key.as_ref() != Some(&key);
+        let points_stale = self.points_key.as_ref() != Some(&points_key);
+        if !(stale || points_stale) {
+            return (Arc::clone(&self.data), Arc::clone(&self.points));
+        }
+        let motions = state.motions();
+        let view = state.doc.as_ref().map(|doc| SceneView {
+            model: doc.model(),
+            scan: Some(doc.scan()),
+            motions: &motions,
+            selected: state.selected,
+            hovered: highlighted,
+        });
+        if stale {
+            self.data = Arc::new(view.as_ref().map(|v| scene_geometry(v, &state.options)).unwrap_or_default());
             self.generation += 1;
             self.key = Some(key);
         }
-        Arc::clone(&self.data)
+        if points_stale {
+            self.points = Arc::new(view.as_ref().map(|v| scene_points(v, &state.options)).unwrap_or_default());
+            self.points_generation += 1;
+            self.points_key = Some(points_key);
+        }
+        (Arc::clone(&self.data), Arc::clone(&self.points))
     }
 }
 
 struct SceneCallback {
     data: Arc<DrawData>,
     generation: u64,
+    points: Arc<Vec<PointInstance>>,
+    points_generation: u64,
     frame: FrameParams,
 }
 
@@ -62,7 +74,8 @@ impl egui_wgpu::CallbackTrait for SceneCallback {
         resources: &mut egui_wgpu::CallbackResources,
     ) -> Vec<wgpu::CommandBuffer> {
         if let Some(renderer) = resources.get_mut::<SceneRenderer>() {
-            renderer.upload(device, queue, &self.data, self.generation);
+            renderer.upload_geometry(device, queue, &self.data, self.generation);
+            renderer.upload_points(device, queue, &self.points, self.points_generation);
             renderer.render(device, queue, encoder, &self.frame);
         }
         Vec::new()
@@ -123,7 +136,7 @@ pub fn view3d_ui(ui: &mut egui::Ui, state: &mut AppState, cache: &mut ViewCache,
     if response.clicked() {
         commands.push(AppCommand::Select(hit));
     }
-    let data = cache.data(state);
+    let (data, points) = cache.data(state);
     if state.needs_framing
         && let Some((lo, hi)) = data.bounds
     {
@@ -139,7 +152,10 @@ pub fn view3d_ui(ui: &mut egui::Ui, state: &mut AppState, cache: &mut ViewCache,
             size_px,
             point_size_px: 1.6 * ppp,
         };
-        ui.painter().add(egui_wgpu::Callback::new_paint_callback(rect, SceneCallback { data, generation: cache.generation, frame }));
+        ui.painter().add(egui_wgpu::Callback::new_paint_callback(
+            rect,
+            SceneCallback { data, generation: cache.generation, points, points_generation: cache.points_generation, frame },
+        ));
     } else {
         ui.painter().rect_filled(rect, 0.0, egui::Color32::from_gray(30));
         ui.painter().text(
@@ -169,5 +185,34 @@ pub fn view3d_ui(ui: &mut egui::Ui, state: &mut AppState, cache: &mut ViewCache,
             egui::FontId::proportional(13.0),
             egui::Color32::WHITE,
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::state::Autosave;
+    use crate::edit::SceneSource;
+    use crate::pipeline::{PinnedEdits, PipelineConfig};
+
+    #[test]
+    fn hovering_rebuilds_the_highlight_but_not_the_scan_points() {
+        let mut state = AppState::new(PipelineConfig::default(), Autosave::at(None));
+        state.open_blocking(SceneSource::Demo { seed: 0, clean: false }, PinnedEdits::default());
+        let mut cache = ViewCache::default();
+        let (data, points) = cache.data(&state);
+        assert!(!points.is_empty() && !data.opaque.is_empty());
+        let part = state.doc.as_ref().unwrap().model().parts[3].id;
+        state.hovered = Some(part);
+        let (hovered, same_points) = cache.data(&state);
+        assert!(!Arc::ptr_eq(&data, &hovered), "the highlight is redrawn");
+        assert!(Arc::ptr_eq(&points, &same_points), "the points are kept");
+        // Selecting highlights the part's points too: they are rebuilt.
+        state.selected = Some(part);
+        let (_, selected_points) = cache.data(&state);
+        assert!(!Arc::ptr_eq(&points, &selected_points));
+        // Nothing changed: nothing rebuilt.
+        let (again, again_points) = cache.data(&state);
+        assert!(Arc::ptr_eq(&again_points, &selected_points) && Arc::ptr_eq(&again, &cache.data(&state).0));
     }
 }

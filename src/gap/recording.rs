@@ -272,6 +272,13 @@ fn check_pose_groups(file: &Path, header_line: usize, columns: &[(String, Channe
 }
 
 impl Recording {
+    /// The model the recording names in its `# model:` line (relative to the CSV file), if any.
+    #[must_use]
+    pub fn named_model_path(&self) -> Option<PathBuf> {
+        let rel = self.metadata.get("model")?;
+        Some(self.file.parent().unwrap_or(std::path::Path::new(".")).join(rel.trim()))
+    }
+
     /// Checks every column against the model: joint columns must name a movable joint, pose
     /// columns a link. The error points at the header cell.
     pub fn check_names(&self, joint_names: &[&str], link_names: &[&str]) -> Result<(), GapError> {

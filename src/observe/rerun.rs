@@ -205,8 +205,8 @@ impl Observer for RerunObserver {
         for j in scene.joints.iter().filter(|j| j.kind != JointKind::Fixed) {
             let object = object_of.get(&j.child).copied().unwrap_or_default();
             let length = scene.part(j.child).map_or(0.3, |p| p.primitive.size.max_element().clamp(0.1, 1.0));
-            let color =
-                if j.kind == JointKind::Revolute { rerun::Color::from_rgb(215, 60, 215) } else { rerun::Color::from_rgb(25, 190, 240) };
+            let [r, g, b] = crate::model::joint_kind_color(j.kind);
+            let color = rerun::Color::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8);
             let arrow = rerun::Arrows3D::from_vectors([(j.axis_world * length).to_array()])
                 .with_origins([j.origin_world.to_array()])
                 .with_colors([color])

@@ -190,8 +190,8 @@ fn to_u8(c: [f32; 3], alpha: f32) -> [u8; 4] {
 }
 
 const SELECTED: [f32; 3] = [1.0, 0.55, 0.1];
-const REVOLUTE: [f32; 3] = [0.85, 0.2, 0.85];
-const PRISMATIC: [f32; 3] = [0.1, 0.75, 0.95];
+const REVOLUTE: [f32; 3] = crate::model::joint_kind_color(JointKind::Revolute);
+const PRISMATIC: [f32; 3] = crate::model::joint_kind_color(JointKind::Prismatic);
 
 /// The primitive of a part where its joints put it.
 #[must_use]
@@ -205,6 +205,27 @@ pub fn posed_primitive(prim: &Primitive, motion: Option<&Pose>) -> Primitive {
 /// Builds the draw data of a view.
 #[must_use]
 pub fn scene_draw_data(view: &SceneView<'_>, options: &DrawOptions) -> DrawData {
+    let mut out = scene_geometry(view, options);
+    out.points = scene_points(view, options);
+    out
+}
+
+/// The scan's points as drawn (by part, the selected part highlighted, or by fit error), moved
+/// with their parts. Hover does not change them: the editor caches them apart from the rest.
+#[must_use]
+pub fn scene_points(view: &SceneView<'_>, options: &DrawOptions) -> Vec<PointInstance> {
+    let mut out = DrawData::default();
+    if options.show_points
+        && let Some(scan) = view.scan
+    {
+        push_points(&mut out, scan, view, options);
+    }
+    out.points
+}
+
+/// Everything but the scan points: primitives, joints, contact edges, floor, bounds.
+#[must_use]
+pub fn scene_geometry(view: &SceneView<'_>, options: &DrawOptions) -> DrawData {
     let mut out = DrawData::default();
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
@@ -229,11 +250,6 @@ pub fn scene_draw_data(view: &SceneView<'_>, options: &DrawOptions) -> DrawData 
         let alpha = if view.selected == Some(*id) { options.primitive_alpha.max(0.6) } else { options.primitive_alpha };
         let batch = if alpha < 0.999 { &mut out.translucent } else { &mut out.opaque };
         batch.push_primitive(prim, [color[0], color[1], color[2], alpha]);
-    }
-    if options.show_points
-        && let Some(scan) = view.scan
-    {
-        push_points(&mut out, scan, view, options);
     }
     if options.show_joints {
         for j in &model.joints {

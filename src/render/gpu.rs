@@ -139,8 +139,9 @@ pub struct SceneRenderer {
     blended: Batches,
     point_buffer: DynBuffer,
     line_buffer: DynBuffer,
-    /// Which draw data is uploaded (the caller's generation counter).
+    /// Which draw data is uploaded (the caller's generation counters).
     uploaded: Option<u64>,
+    uploaded_points: Option<u64>,
     target: Option<ViewTarget>,
 }
 
@@ -331,20 +332,36 @@ impl SceneRenderer {
             point_buffer: DynBuffer::new("points", wgpu::BufferUsages::VERTEX),
             line_buffer: DynBuffer::new("lines", wgpu::BufferUsages::VERTEX),
             uploaded: None,
+            uploaded_points: None,
             target: None,
         }
     }
 
-    /// Uploads `data` unless the data of `generation` is already there.
+    /// Uploads `data` (points included) unless the data of `generation` is already there.
     pub fn upload(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, data: &DrawData, generation: u64) {
+        self.upload_geometry(device, queue, data, generation);
+        self.upload_points(device, queue, &data.points, generation);
+    }
+
+    /// Uploads everything of `data` but its points, unless `generation` is already there.
+    pub fn upload_geometry(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, data: &DrawData, generation: u64) {
         if self.uploaded == Some(generation) {
             return;
         }
         self.opaque.upload(device, queue, &data.opaque);
         self.blended.upload(device, queue, &data.translucent);
-        self.point_buffer.upload(device, queue, &data.points);
         self.line_buffer.upload(device, queue, &data.lines);
         self.uploaded = Some(generation);
+    }
+
+    /// Uploads the scan points, unless those of `generation` are already there (hover changes
+    /// the rest of the view, not the points).
+    pub fn upload_points(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, points: &[PointInstance], generation: u64) {
+        if self.uploaded_points == Some(generation) {
+            return;
+        }
+        self.point_buffer.upload(device, queue, points);
+        self.uploaded_points = Some(generation);
     }
 
     fn ensure_target(&mut self, device: &wgpu::Device, size_px: [u32; 2]) {

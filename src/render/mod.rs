@@ -12,7 +12,7 @@ mod shot;
 pub use camera::{OrbitCamera, ViewPreset};
 pub use draw::{
     DrawData, DrawOptions, FIT_ERROR_FULL_SCALE_M, LineVertex, PointColors, PointInstance, SceneView, SolidBatches, SolidInstance,
-    error_color, part_color, pick_part, posed_primitive, scene_draw_data,
+    error_color, part_color, pick_part, posed_primitive, scene_draw_data, scene_geometry, scene_points,
 };
 pub use gpu::{BACKGROUND, FrameParams, SceneRenderer, VIEW_FORMAT};
 pub use mesh::{Mesh, MeshVertex, unit_cube, unit_cylinder, unit_sphere};
