@@ -410,7 +410,9 @@ fn write_csv(
             } else {
                 let _ = write!(out, ",{:.7}", q_all[j][i] + noise.sample(rng));
             }
-            let _ = write!(out, ",{:.6}", effort_all[j][i]);
+            // Shortest exact decimal: a fixed number of decimals would round a light part's
+            // efforts (a knob's are ~1e-5 N·m) by whole percent, a real effort-gain error.
+            let _ = write!(out, ",{}", effort_all[j][i]);
         }
         out.push('\n');
     }
