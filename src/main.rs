@@ -225,6 +225,8 @@ impl Progress for Bars {
 }
 
 /// Where the pipeline's stages are reported: a Rerun recording or viewer when asked for.
+// Fallible only with the `rerun` feature.
+#[cfg_attr(not(feature = "rerun"), allow(clippy::unnecessary_wraps))]
 fn observer(cli: &Cli) -> Result<Box<dyn Observer>> {
     #[cfg(feature = "rerun")]
     {
