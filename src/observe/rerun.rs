@@ -87,8 +87,13 @@ impl RerunObserver {
 }
 
 fn color(id: PartId) -> rerun::Color {
-    let [r, g, b] = crate::model::part_color(id);
-    rerun::Color::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8)
+    rgb(crate::model::part_color(id))
+}
+
+/// An sRGB 0..1 colour as Rerun's 8-bit colour.
+fn rgb([r, g, b]: [f32; 3]) -> rerun::Color {
+    let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    rerun::Color::from_rgb(q(r), q(g), q(b))
 }
 
 fn quat(prim: &Primitive) -> rerun::Quaternion {
@@ -205,8 +210,7 @@ impl Observer for RerunObserver {
         for j in scene.joints.iter().filter(|j| j.kind != JointKind::Fixed) {
             let object = object_of.get(&j.child).copied().unwrap_or_default();
             let length = scene.part(j.child).map_or(0.3, |p| p.primitive.size.max_element().clamp(0.1, 1.0));
-            let [r, g, b] = crate::model::joint_kind_color(j.kind);
-            let color = rerun::Color::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8);
+            let color = rgb(crate::model::joint_kind_color(j.kind));
             let arrow = rerun::Arrows3D::from_vectors([(j.axis_world * length).to_array()])
                 .with_origins([j.origin_world.to_array()])
                 .with_colors([color])

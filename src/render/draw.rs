@@ -214,13 +214,10 @@ pub fn scene_draw_data(view: &SceneView<'_>, options: &DrawOptions) -> DrawData 
 /// with their parts. Hover does not change them: the editor caches them apart from the rest.
 #[must_use]
 pub fn scene_points(view: &SceneView<'_>, options: &DrawOptions) -> Vec<PointInstance> {
-    let mut out = DrawData::default();
-    if options.show_points
-        && let Some(scan) = view.scan
-    {
-        push_points(&mut out, scan, view, options);
+    match view.scan {
+        Some(scan) if options.show_points => points(scan, view, options),
+        _ => Vec::new(),
     }
-    out.points
 }
 
 /// Everything but the scan points: primitives, joints, contact edges, floor, bounds.
@@ -273,7 +270,8 @@ pub fn scene_geometry(view: &SceneView<'_>, options: &DrawOptions) -> DrawData {
     out
 }
 
-fn push_points(out: &mut DrawData, scan: &Scan, view: &SceneView<'_>, options: &DrawOptions) {
+fn points(scan: &Scan, view: &SceneView<'_>, options: &DrawOptions) -> Vec<PointInstance> {
+    let mut out = Vec::new();
     let total = scan.point_count().max(1);
     let stride = total.div_ceil(options.max_points.max(1)).max(1);
     for part in &scan.parts {
@@ -288,9 +286,10 @@ fn push_points(out: &mut DrawData, scan: &Scan, view: &SceneView<'_>, options: &
                 (PointColors::ByPart, _) => dim(base),
             };
             let world = motion.map_or(*p, |m| m.transform_point(*p));
-            out.points.push(PointInstance { position_world: world.into(), color: to_u8(color, 1.0) });
+            out.push(PointInstance { position_world: world.into(), color: to_u8(color, 1.0) });
         }
     }
+    out
 }
 
 /// Axis rods, pivot balls and the range of motion.
