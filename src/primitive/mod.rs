@@ -273,9 +273,24 @@ pub(crate) fn r2(i: usize) -> (f32, f32) {
 }
 
 /// Splits `n` samples over areas proportionally (at least one each where the area is positive).
+/// The counts add up to at most `n + areas.len()` whatever the areas (huge, overflowing to
+/// infinity, NaN): a share that is not a finite number in [0, 1] gets one sample, so no size can
+/// turn into an allocation.
 pub(crate) fn split_counts(n: usize, areas: &[f32]) -> Vec<usize> {
-    let total: f32 = areas.iter().sum();
-    areas.iter().map(|a| if *a <= 0.0 || total <= 0.0 { 0 } else { ((n as f32 * a / total).round() as usize).max(1) }).collect()
+    let total: f64 = areas.iter().map(|a| f64::from(*a)).sum();
+    areas
+        .iter()
+        .map(|a| {
+            let share = f64::from(*a) / total;
+            if *a <= 0.0 || total <= 0.0 || a.is_nan() {
+                0
+            } else if share.is_finite() {
+                ((n as f64 * share.clamp(0.0, 1.0)).round() as usize).max(1)
+            } else {
+                1
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -285,6 +300,19 @@ mod tests {
     fn prim(kind: PrimitiveKind, size: Vec3) -> Primitive {
         let pose = Pose::from_parts(Vec3::new(1.0, -2.0, 0.5), Quat::from_euler(glam::EulerRot::XYZ, 0.3, 0.2, 1.0));
         Primitive::new(kind, size, pose)
+    }
+
+    /// A 4.8 KB PLY with coordinates near 1e37 made `split_counts` ask for `usize::MAX` samples
+    /// (n · area overflowed to infinity) and the reconstruction abort after allocating 13 GB.
+    #[test]
+    fn huge_primitives_get_a_bounded_number_of_samples() {
+        for kind in PrimitiveKind::ALL {
+            for size in [Vec3::new(3e37, 2e37, 1e37), Vec3::new(f32::MAX, 1.0, f32::MAX), Vec3::new(1e-30, 1e30, 1e-30)] {
+                let p = prim(kind, size);
+                let samples = p.sample_surface(500);
+                assert!(samples.len() <= 510, "{kind:?} {size}: {} samples", samples.len());
+            }
+        }
     }
 
     #[test]

@@ -38,6 +38,12 @@ pub enum ScanError {
     #[error("{file}: vertex {vertex} has a non-finite `{property}` ({value}); expected finite coordinates within the f32 range")]
     NonFinite { file: String, vertex: usize, property: String, value: String },
 
+    /// A coordinate is finite but beyond any room (see `scan::ply::MAX_COORDINATE_M`).
+    #[error(
+        "{file}: vertex {vertex} has `{property}` = {value:e} m; expected |{property}| <= {limit:e} m (a room-scale scan; check the units)"
+    )]
+    OutOfRange { file: String, vertex: usize, property: String, value: f32, limit: f32 },
+
     /// The body ends before all declared elements were read.
     #[error("{file}: the PLY body is truncated: {detail}")]
     Truncated { file: String, detail: String },

@@ -130,13 +130,15 @@ pub(crate) fn read_vertices(bytes: &[u8], file: &str, warnings: &mut Vec<Warning
         let start_line = reader.line();
         let start_byte = usize::try_from(reader.get_ref().position()).unwrap_or(usize::MAX);
         let body = bytes.get(start_byte..).unwrap_or_default();
-        if header.encoding != Encoding::Ascii {
+        if header.encoding == Encoding::Ascii {
+            check_ascii_length(def, body, file)?;
+        } else {
             check_binary_length(def, body, file)?;
         }
         let vertices = Parser::<RawVertex>::new()
             .read_payload_for_element(&mut reader, def, &header)
             .map_err(|e| vertex_error(&e, file, def, start_line, body, &header))?;
-        check_finite(&vertices, file)?;
+        check_coordinates(&vertices, file)?;
         return Ok(PlyVertices { vertices, has_normals });
     }
     // `vertex` is among the elements (checked above), so the loop returned.
@@ -310,10 +312,44 @@ fn non_finite_token(line: &str, def: &ElementDef) -> Option<(String, String)> {
     None
 }
 
-fn check_finite(vertices: &[RawVertex], file: &str) -> Result<(), ScanError> {
-    let Some((vertex, v)) = vertices.iter().enumerate().find(|(_, v)| !v.position.iter().all(|c| c.is_finite())) else {
+/// Largest coordinate magnitude accepted, metres. A scan of a room or a building spans tens of
+/// metres; 10 km leaves room for georeferenced offsets while keeping every size derived from the
+/// points (boxes, areas, sample counts, grids) far from overflow, and f32 still resolves a
+/// millimetre there. Anything larger is a unit or encoding error, not a scan.
+pub const MAX_COORDINATE_M: f32 = 1.0e4;
+
+/// Every coordinate finite and within [`MAX_COORDINATE_M`]; the first that is not is named.
+fn check_coordinates(vertices: &[RawVertex], file: &str) -> Result<(), ScanError> {
+    for (vertex, v) in vertices.iter().enumerate() {
+        for (axis, c) in v.position.iter().enumerate() {
+            let property = COORDINATES[axis].to_owned();
+            if !c.is_finite() {
+                return Err(ScanError::NonFinite { file: file.to_owned(), vertex, property, value: c.to_string() });
+            }
+            if c.abs() > MAX_COORDINATE_M {
+                return Err(ScanError::OutOfRange { file: file.to_owned(), vertex, property, value: *c, limit: MAX_COORDINATE_M });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An ascii vertex takes at least one byte per property: a header that declares more vertices
+/// than the body can hold is refused before anything is allocated (the parser's own message,
+/// with the line where the file ends, covers the counts in between).
+fn check_ascii_length(def: &ElementDef, body: &[u8], file: &str) -> Result<(), ScanError> {
+    let min_bytes = def.properties.len().max(1);
+    let most = body.len() / min_bytes;
+    if def.count <= most {
         return Ok(());
-    };
-    let axis = v.position.iter().position(|c| !c.is_finite()).unwrap_or(0);
-    Err(ScanError::NonFinite { file: file.to_owned(), vertex, property: COORDINATES[axis].to_owned(), value: v.position[axis].to_string() })
+    }
+    Err(ScanError::Truncated {
+        file: file.to_owned(),
+        detail: format!(
+            "the header declares {} vertices, but the {} bytes after the header hold at most {most} ascii vertices of {} properties",
+            def.count,
+            body.len(),
+            def.properties.len()
+        ),
+    })
 }

@@ -254,6 +254,8 @@ fn errors_name_the_file_and_what_was_expected() {
         (format!("{}0 0 0 1 1\n1 1 1 1 1\n0 0 nan 1 1\n", h(&format!("{xyz}{ids}"), 3)), None, "vertex 2 has a non-finite `z` (nan)"),
         (format!("{}0 0 0 1 1\n-inf 0 0 1 1\n", h(&format!("{xyz}{ids}"), 2)), None, "vertex 1 has a non-finite `x` (-inf)"),
         (format!("{}0 0 0 1 1\n0 1e39 0 1 1\n", h(&format!("{xyz}{ids}"), 2)), None, "vertex 1 has a non-finite `y` (inf)"),
+        (format!("{}0 0 0 1 1\n0 0 -3e37 1 1\n", h(&format!("{xyz}{ids}"), 2)), None, "vertex 1 has `z` = -3e37 m; expected |z| <= 1e4 m"),
+        (format!("{}0 0 0 1 1\n", h(&format!("{xyz}{ids}"), 4_000_000_000)), None, "declares 4000000000 vertices"),
         (format!("{}0 0 0 1 1\n0 0 0 1\n", h(&format!("{xyz}{ids}"), 2)), None, "at `vertex` element 1"),
         (format!("{}0 0 0 1 1\nzero 0 0 1 1\n", h(&format!("{xyz}{ids}"), 2)), None, "at `vertex` element 1"),
         (format!("{}0 0 0 1 1\n1 1 1 1 1\n", h(&format!("{xyz}{ids}"), 4)), None, "expected 4 `vertex` elements, the file ends after 2"),
