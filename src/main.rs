@@ -188,6 +188,18 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Multibody dynamics of a URDF at given states (checks against other libraries): inverse
+    /// dynamics, mass matrix, bias efforts and forward dynamics, as JSON.
+    Dynamics {
+        /// The URDF (fixed root).
+        #[arg(long)]
+        model: PathBuf,
+        /// `{"joints": [..], "gravity": [x, y, z], "states": [{"q", "qd", "qdd", "tau"}]}`.
+        #[arg(long)]
+        states: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 /// indicatif bars on stderr, only on a terminal and not in --json mode.
@@ -312,6 +324,7 @@ fn main() -> Result<()> {
         Command::Mjcf { scene, effects, out } => mjcf_cmd(&scene, effects.as_deref(), &out),
         Command::Bench { dir, markdown, seed } => bench_cmd(&dir, markdown.as_deref(), seed, &cfg, cli.json),
         Command::Gap { model, recording, out } => gap_cmd(model.as_deref(), &recording, &out, cli.json),
+        Command::Dynamics { model, states, out } => dynamics_cmd(&model, &states, &out),
     }
 }
 
@@ -600,6 +613,81 @@ fn gap_cmd(model: Option<&Path>, recording: &Path, out: &Path, json: bool) -> Re
         println!("rmse {:.5} -> {:.5}", report.fit.rmse_before, report.fit.rmse_after);
     }
     Ok(())
+}
+
+/// States in the order of `joints` (names from the URDF).
+#[derive(serde::Deserialize)]
+struct DynamicsStates {
+    joints: Vec<String>,
+    #[serde(default = "default_gravity")]
+    gravity: [f64; 3],
+    states: Vec<DynamicsState>,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+
+#[derive(serde::Deserialize)]
+struct DynamicsState {
+    q: Vec<f64>,
+    #[serde(default)]
+    qd: Vec<f64>,
+    #[serde(default)]
+    qdd: Vec<f64>,
+    #[serde(default)]
+    tau: Vec<f64>,
+}
+
+fn dynamics_cmd(model_path: &Path, states_path: &Path, out: &Path) -> Result<()> {
+    let model = partscene::gap::load_model(model_path)?;
+    let (tree, _) = model.multibody()?;
+    let text = std::fs::read_to_string(states_path).with_context(|| format!("reading {}", states_path.display()))?;
+    let input: DynamicsStates =
+        serde_json::from_str(&text).with_context(|| format!("{}: expected joints, gravity, states", states_path.display()))?;
+    let dof_names: Vec<&str> = model.dofs().into_iter().map(|j| model.joints[j].name.as_str()).collect();
+    // Position of each of our coordinates in the caller's order.
+    let mut from_caller = Vec::with_capacity(dof_names.len());
+    for name in &dof_names {
+        let Some(k) = input.joints.iter().position(|j| j == name) else {
+            anyhow::bail!("{}: joint {name} of {} is missing from `joints`", states_path.display(), model_path.display());
+        };
+        from_caller.push(k);
+    }
+    let n = dof_names.len();
+    let gravity = glam::DVec3::from_array(input.gravity);
+    let ours = |v: &[f64]| -> Vec<f64> { from_caller.iter().map(|&k| v.get(k).copied().unwrap_or(0.0)).collect() };
+    let theirs = |v: &[f64]| -> Vec<f64> {
+        let mut out = vec![0.0; input.joints.len()];
+        for (i, &k) in from_caller.iter().enumerate() {
+            out[k] = v[i];
+        }
+        out
+    };
+    let mut results = Vec::with_capacity(input.states.len());
+    for (index, s) in input.states.iter().enumerate() {
+        let (q, qd, qdd, tau) = (ours(&s.q), ours(&s.qd), ours(&s.qdd), ours(&s.tau));
+        let m = tree.mass_matrix(&q);
+        let mass_matrix: Vec<Vec<f64>> =
+            (0..input.joints.len()).map(|r| (0..input.joints.len()).map(|c| caller_entry(&m, n, &from_caller, r, c)).collect()).collect();
+        let forward =
+            tree.forward_dynamics(&q, &qd, &tau, gravity).with_context(|| format!("state {index}: the mass matrix is singular"))?;
+        results.push(serde_json::json!({
+            "tau": theirs(&tree.inverse_dynamics(&q, &qd, &qdd, gravity)),
+            "mass_matrix": mass_matrix,
+            "bias": theirs(&tree.bias(&q, &qd, gravity)),
+            "qdd": theirs(&forward),
+        }));
+    }
+    let json = serde_json::json!({ "joints": input.joints, "results": results });
+    partscene::io::atomic_write(out, serde_json::to_string_pretty(&json)?.as_bytes())?;
+    Ok(())
+}
+
+/// Entry (r, c) of the caller's matrix from ours (0 for names that are not coordinates here).
+fn caller_entry(m: &[f64], n: usize, from_caller: &[usize], r: usize, c: usize) -> f64 {
+    let (Some(i), Some(j)) = (from_caller.iter().position(|&k| k == r), from_caller.iter().position(|&k| k == c)) else { return 0.0 };
+    m[i * n + j]
 }
 
 fn mjcf_cmd(scene_path: &Path, effects: Option<&Path>, out: &Path) -> Result<()> {

@@ -23,6 +23,13 @@ pub enum EffectKind {
     MassScale,
     /// Viscous damping only between `engage_position` and the closed end.
     SoftClose,
+    /// Friction that takes more force to start than to keep moving:
+    /// −(friction + (breakaway − friction)·exp(−(v/`stribeck_speed`)²))·sign(v).
+    StribeckFriction,
+    /// A constant effort added to the recorded one (sensor bias, gravity compensation).
+    EffortOffset,
+    /// Reflected rotor inertia added to the joint's own diagonal inertia (no weight).
+    Armature,
     /// Structure in the residual that no known kind explains.
     Unknown,
 }
@@ -43,6 +50,9 @@ impl EffectKind {
             Self::EndStop => "end_stop",
             Self::MassScale => "mass_scale",
             Self::SoftClose => "soft_close",
+            Self::StribeckFriction => "stribeck_friction",
+            Self::EffortOffset => "effort_offset",
+            Self::Armature => "armature",
             Self::Unknown => "unknown",
         }
     }
@@ -58,6 +68,9 @@ impl EffectKind {
             Self::GravityTilt => &["torque_amplitude", "equilibrium_position"],
             Self::EndStop => &["position", "restitution"],
             Self::MassScale => &["scale"],
+            Self::StribeckFriction => &["friction", "breakaway", "stribeck_speed"],
+            Self::EffortOffset => &["offset"],
+            Self::Armature => &["armature"],
             Self::Unknown => &[],
         }
     }
@@ -66,8 +79,9 @@ impl EffectKind {
     #[must_use]
     pub fn param_count(self) -> usize {
         match self {
-            Self::ViscousDamping | Self::CoulombFriction | Self::MassScale => 1,
+            Self::ViscousDamping | Self::CoulombFriction | Self::MassScale | Self::EffortOffset | Self::Armature => 1,
             Self::Spring | Self::GravityTilt | Self::EndStop | Self::SoftClose => 2,
+            Self::StribeckFriction => 3,
             Self::Unknown => 0,
         }
     }
@@ -85,8 +99,23 @@ impl EffectKind {
     /// Parses the spec's name.
     #[must_use]
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::FITTABLE.into_iter().chain([Self::Unknown]).find(|k| k.name() == name)
+        Self::ALL.into_iter().find(|k| k.name() == name)
     }
+
+    /// Every kind, `unknown` last.
+    pub const ALL: [Self; 11] = [
+        Self::ViscousDamping,
+        Self::CoulombFriction,
+        Self::Spring,
+        Self::GravityTilt,
+        Self::EndStop,
+        Self::MassScale,
+        Self::SoftClose,
+        Self::StribeckFriction,
+        Self::EffortOffset,
+        Self::Armature,
+        Self::Unknown,
+    ];
 }
 
 /// One effect with its internal parameters (see [`EffectKind::internal_params`]).
@@ -98,6 +127,19 @@ pub struct Effect {
     pub params: Vec<f64>,
     /// For `end_stop`: true when the stop blocks motion upwards (q may not exceed `position`).
     pub blocks_upward: bool,
+}
+
+/// The shape of a joint's friction beyond its level (effort space fits it; the position-space
+/// fitter keeps the ideal law).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FrictionShape {
+    /// Speed of the smooth transition through zero, tanh(v / `transition_speed`); 0 = ideal sign
+    /// with exact sticking.
+    pub transition_speed: f64,
+    /// Level for v < 0 when it differs from the level for v > 0.
+    pub friction_reverse: Option<f64>,
+    /// Stribeck: (breakaway level, Stribeck speed); `friction` is then the sliding level.
+    pub stribeck: Option<(f64, f64)>,
 }
 
 /// An extra hard stop.
@@ -118,8 +160,14 @@ pub struct JointPhysics {
     pub kind: DofKind,
     /// Total viscous damping.
     pub damping: f64,
-    /// Total Coulomb friction.
+    /// Total Coulomb friction (the level for v > 0).
     pub friction: f64,
+    /// Smooth, direction-dependent or Stribeck friction.
+    pub friction_shape: FrictionShape,
+    /// Constant effort added to the recorded one.
+    pub effort_offset: f64,
+    /// Reflected inertia added to the joint's own.
+    pub armature: f64,
     /// Spring stiffness.
     pub stiffness: f64,
     /// Spring rest position.
@@ -150,6 +198,9 @@ impl JointPhysics {
             kind: joint.kind,
             damping: joint.damping,
             friction: joint.friction,
+            friction_shape: FrictionShape::default(),
+            effort_offset: 0.0,
+            armature: 0.0,
             stiffness: 0.0,
             rest_position: 0.0,
             tilt_amplitude: 0.0,
@@ -171,7 +222,21 @@ impl JointPhysics {
             let x = &e.params;
             match e.kind {
                 EffectKind::ViscousDamping => p.damping += x[0],
-                EffectKind::CoulombFriction => p.friction += x[0],
+                EffectKind::CoulombFriction => {
+                    p.friction += x[0];
+                    if let Some(&speed) = x.get(1) {
+                        p.friction_shape.transition_speed = speed.max(0.0);
+                    }
+                    if let Some(&reverse) = x.get(2).filter(|r| r.is_finite()) {
+                        p.friction_shape.friction_reverse = Some(reverse);
+                    }
+                }
+                EffectKind::StribeckFriction => {
+                    p.friction += x[0];
+                    p.friction_shape.stribeck = Some((x[1], x[2].max(1e-6)));
+                }
+                EffectKind::EffortOffset => p.effort_offset += x[0],
+                EffectKind::Armature => p.armature += x[0],
                 EffectKind::Spring => (p.stiffness, p.rest_position) = (x[0], x[1]),
                 EffectKind::GravityTilt => (p.tilt_amplitude, p.tilt_equilibrium) = (x[0], x[1]),
                 EffectKind::EndStop => p.stops.push(Stop { position: x[0], restitution: x[1], blocks_upward: e.blocks_upward }),
@@ -188,6 +253,27 @@ impl JointPhysics {
     pub fn position_effort(&self, q: f64) -> f64 {
         let tilt = if self.tilt_amplitude == 0.0 { 0.0 } else { self.tilt_amplitude * (q - self.tilt_equilibrium).sin() };
         -self.stiffness * (q - self.rest_position) - tilt
+    }
+
+    /// The friction level opposing motion at velocity v (direction by the sign of v; at v = 0 the
+    /// level to break away).
+    #[must_use]
+    pub fn friction_level(&self, v: f64) -> f64 {
+        let base = match self.friction_shape.friction_reverse {
+            Some(reverse) if v < 0.0 => reverse,
+            _ => self.friction,
+        };
+        match self.friction_shape.stribeck {
+            Some((breakaway, speed)) => base + (breakaway - base) * (-(v / speed).powi(2)).exp(),
+            None => base,
+        }
+    }
+
+    /// The friction force at velocity v for the smooth law (`transition_speed` > 0).
+    #[must_use]
+    pub fn smooth_friction(&self, v: f64) -> f64 {
+        let s = self.friction_shape.transition_speed.max(1e-12);
+        -self.friction_level(v) * (v / s).tanh()
     }
 
     /// Total viscous damping at position q (soft close included).
@@ -214,6 +300,7 @@ pub fn clamp_params(kind: EffectKind, x: &mut [f64]) {
         }
         EffectKind::EndStop => x[1] = x[1].clamp(0.0, 1.0),
         EffectKind::MassScale => x[0] = x[0].max(0.05),
-        EffectKind::Unknown => {}
+        EffectKind::StribeckFriction | EffectKind::Armature => x.iter_mut().for_each(|v| *v = v.max(0.0)),
+        EffectKind::EffortOffset | EffectKind::Unknown => {}
     }
 }

@@ -1,50 +1,14 @@
 //! Output-error fitting: Levenberg–Marquardt on multiple-shooting segments. The unknowns are the
 //! effects' parameters plus a free initial state (q, v) per segment; the residual is measured
 //! minus simulated position, in units of the noise σ. Jacobians by forward differences (a segment
-//! state only touches its own segment). Normal equations are small and dense: solved here by a
-//! hand-written Cholesky — a linear-algebra crate (nalgebra & co.) would be a heavy dependency for
-//! a few dozen unknowns.
+//! state only touches its own segment). Normal equations are small and dense (`crate::linalg`).
 
 use super::effects::{Effect, JointPhysics, clamp_params};
 use super::locate::Span;
 use super::model::GapJoint;
 use super::sim::{SimInput, simulate};
 
-/// Solves `a x = b` for a symmetric positive definite `a` (row-major n×n); None if not SPD.
-#[must_use]
-pub fn solve_spd(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
-    let mut l = vec![0.0; n * n];
-    for i in 0..n {
-        for j in 0..=i {
-            let mut s = a[i * n + j];
-            for k in 0..j {
-                s -= l[i * n + k] * l[j * n + k];
-            }
-            if i == j {
-                if s <= 0.0 || !s.is_finite() {
-                    return None;
-                }
-                l[i * n + i] = s.sqrt();
-            } else {
-                l[i * n + j] = s / l[j * n + j];
-            }
-        }
-    }
-    let mut y = b.to_vec();
-    for i in 0..n {
-        for k in 0..i {
-            y[i] -= l[i * n + k] * y[k];
-        }
-        y[i] /= l[i * n + i];
-    }
-    for i in (0..n).rev() {
-        for k in i + 1..n {
-            y[i] -= l[k * n + i] * y[k];
-        }
-        y[i] /= l[i * n + i];
-    }
-    Some(y)
-}
+pub use crate::linalg::solve_spd;
 
 /// One joint's fitting problem.
 #[derive(Debug, Clone)]
@@ -448,21 +412,4 @@ pub fn open_loop(input: &SimInput<'_>, physics: &JointPhysics, state: (f64, f64)
         simulate(input, physics, 0, n - 1, state.0, state.1, &mut out);
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cholesky_solves() {
-        let a = [4.0, 2.0, 0.6, 2.0, 2.0, 0.5, 0.6, 0.5, 3.0];
-        let x = [1.0, -2.0, 0.5];
-        let b: Vec<f64> = (0..3).map(|i| (0..3).map(|j| a[i * 3 + j] * x[j]).sum()).collect();
-        let got = solve_spd(&a, &b, 3).expect("spd");
-        for i in 0..3 {
-            assert!((got[i] - x[i]).abs() < 1e-12);
-        }
-        assert!(solve_spd(&[1.0, 2.0, 2.0, 1.0], &[1.0, 1.0], 2).is_none());
-    }
 }

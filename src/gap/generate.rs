@@ -48,7 +48,7 @@ pub enum TrueEffect {
         /// In [0, 1].
         restitution: f64,
     },
-    /// True inertia = scale × modelled.
+    /// The moving part `scale` × as heavy: inertia and weight (spec `mass_scale`).
     ExtraInertia {
         /// Multiplier.
         scale: f64,
@@ -314,7 +314,10 @@ pub fn generate_recording(model: &GapModel, cfg: &GenerateConfig) -> Result<Stri
                     // Let the hand push past it so that the stop is hit.
                     if up { reach.1 = reach.1.max(position) } else { reach.0 = reach.0.min(position) }
                 }
-                TrueEffect::ExtraInertia { scale } => tj.inertia *= scale,
+                TrueEffect::ExtraInertia { scale } => {
+                    tj.inertia *= scale;
+                    tj.mass *= scale;
+                }
                 TrueEffect::SoftClose { damping, engage_position } => tj.soft = Some((damping, engage_position)),
             }
         }

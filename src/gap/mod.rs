@@ -21,6 +21,7 @@ pub mod report;
 pub mod select;
 pub mod sim;
 
+use std::fmt::Write as _;
 use std::path::Path;
 
 use glam::DVec3;
@@ -338,7 +339,31 @@ fn effect_report(
         }
         EffectKind::CoulombFriction => {
             put("friction", x[0], sd[0]);
-            format!("Coulomb friction {:.4} ± {:.4} {force}", x[0], sd[0])
+            let mut text = format!("Coulomb friction {:.4} ± {:.4} {force}", x[0], sd[0]);
+            if let Some(&speed) = x.get(1).filter(|s| **s > 0.0) {
+                put("transition_speed", speed, sd.get(1).copied().unwrap_or(f64::NAN));
+                let _ = write!(text, ", smooth through zero speed over {speed:.3} {length}/s");
+            }
+            if let Some(&reverse) = x.get(2).filter(|r| r.is_finite()) {
+                put("friction_reverse", reverse, sd.get(2).copied().unwrap_or(f64::NAN));
+                let _ = write!(text, ", {reverse:.4} {force} when moving backwards");
+            }
+            text
+        }
+        EffectKind::StribeckFriction => {
+            put("friction", x[0], sd[0]);
+            put("breakaway", x[1], sd[1]);
+            put("stribeck_speed", x[2], sd[2]);
+            format!("Stribeck friction: {:.4} {force} sliding, {:.4} {force} to break away, over {:.3} {length}/s", x[0], x[1], x[2])
+        }
+        EffectKind::EffortOffset => {
+            put("offset", x[0], sd[0]);
+            format!("a constant {:.4} ± {:.4} {force} adds to the recorded effort (sensor bias or gravity compensation)", x[0], sd[0])
+        }
+        EffectKind::Armature => {
+            put("armature", x[0], sd[0]);
+            let unit = if rot { "kg·m²" } else { "kg" };
+            format!("reflected rotor inertia {:.5} ± {:.5} {unit} on the joint (inertia without weight)", x[0], sd[0])
         }
         EffectKind::Spring => {
             put("stiffness", x[0], sd[0]);
@@ -363,7 +388,7 @@ fn effect_report(
         }
         EffectKind::MassScale => {
             put("scale", x[0], sd[0]);
-            format!("inertia along the joint {:.3} × the modelled one", x[0])
+            format!("the moving part is {:.3} × as heavy as modelled (inertia and weight)", x[0])
         }
         EffectKind::SoftClose => {
             put("damping", x[0], sd[0]);

@@ -9,6 +9,8 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 
 use super::error::GapError;
+use crate::dynamics::spatial::{ParentFromChild, RigidInertia};
+use crate::dynamics::{Body, JointMotion, MultiBody};
 
 /// Density given to a link without `<inertial>`, kg/m³ (spec §1).
 pub const DEFAULT_DENSITY_KG_M3: f64 = 600.0;
@@ -132,6 +134,9 @@ pub struct JointTerms {
     pub subtree_mass_kg: f64,
     /// Distance of the subtree's centre of mass from the axis, m (0 for prismatic).
     pub com_radius_m: f64,
+    /// Effort on this joint from the recorded motion of the other joints (their accelerations,
+    /// Coriolis and centrifugal terms), which a 1-DoF replay would otherwise drop.
+    pub coupling: f64,
 }
 
 impl JointTerms {
@@ -216,11 +221,22 @@ fn outer(a: DVec3, b: DVec3) -> DMat3 {
     DMat3::from_cols(a * b.x, a * b.y, a * b.z)
 }
 
+/// Names of the links that have an `<inertial>` element (urdf-rs reads a missing one as zeros).
+fn links_with_inertial(text: &str) -> std::collections::BTreeSet<String> {
+    let Ok(doc) = roxmltree::Document::parse(text) else { return std::collections::BTreeSet::new() };
+    doc.root_element()
+        .children()
+        .filter(|n| n.has_tag_name("link") && n.children().any(|c| c.has_tag_name("inertial")))
+        .filter_map(|n| n.attribute("name").map(str::to_owned))
+        .collect()
+}
+
 /// Parses URDF text; `file` names it in messages.
 pub fn parse_model(text: &str, file: &Path) -> Result<GapModel, GapError> {
     let robot = urdf_rs::read_from_string(text).map_err(|e| GapError::Urdf { file: file.to_path_buf(), message: e.to_string() })?;
     let model_error = |field: String, message: String| GapError::Model { file: file.to_path_buf(), field, message };
     let mut notes = Vec::new();
+    let with_inertial = links_with_inertial(text);
     let mut index_of: BTreeMap<&str, usize> = BTreeMap::new();
     let mut links = Vec::with_capacity(robot.links.len());
     for (i, link) in robot.links.iter().enumerate() {
@@ -229,7 +245,10 @@ pub fn parse_model(text: &str, file: &Path) -> Result<GapModel, GapError> {
         }
         let inertial = &link.inertial;
         let i3 = &inertial.inertia;
-        let declared = inertial.mass.value > 0.0 || [i3.ixx, i3.iyy, i3.izz].iter().any(|v| *v > 0.0);
+        // An `<inertial>` written with mass 0 is a massless link, as every other URDF reader
+        // takes it; only a link without the element gets its primitives' mass (spec §1).
+        let declared =
+            with_inertial.contains(link.name.as_str()) || inertial.mass.value > 0.0 || [i3.ixx, i3.iyy, i3.izz].iter().any(|v| *v > 0.0);
         if declared {
             let origin = Iso::from_urdf(&inertial.origin);
             let r = DMat3::from_quat(origin.rotation);
@@ -334,6 +353,38 @@ pub fn parse_model(text: &str, file: &Path) -> Result<GapModel, GapError> {
 }
 
 impl GapModel {
+    /// The model as a multibody tree: one body per link below the root, coordinates in the order
+    /// of [`GapModel::dofs`]; `bodies_of_link[l]` is link `l`'s body (None for the root).
+    pub fn multibody(&self) -> Result<(MultiBody, Vec<Option<usize>>), GapError> {
+        let dofs = self.dofs();
+        let mut body_of_link: Vec<Option<usize>> = vec![None; self.links.len()];
+        let mut bodies = Vec::with_capacity(self.joints.len());
+        for &j in &self.order {
+            let joint = &self.joints[j];
+            let link = &self.links[joint.child];
+            let motion = match joint.kind {
+                DofKind::Fixed => JointMotion::Fixed,
+                DofKind::Revolute | DofKind::Continuous => JointMotion::Revolute(joint.axis_joint),
+                DofKind::Prismatic => JointMotion::Prismatic(joint.axis_joint),
+            };
+            body_of_link[joint.child] = Some(bodies.len());
+            bodies.push(Body {
+                name: link.name.clone(),
+                parent: body_of_link[joint.parent],
+                parent_from_joint: ParentFromChild::new(joint.parent_from_joint.rotation, joint.parent_from_joint.translation),
+                joint: motion,
+                dof: dofs.iter().position(|&d| d == j),
+                inertia: RigidInertia::from_com(link.mass_kg, link.com_link_m, link.inertia_link),
+            });
+        }
+        let tree = MultiBody::new(bodies).map_err(|e| GapError::Model {
+            file: self.file.clone(),
+            field: "joints".into(),
+            message: e.to_string(),
+        })?;
+        Ok((tree, body_of_link))
+    }
+
     /// Index of the joint named `name`.
     #[must_use]
     pub fn joint_index(&self, name: &str) -> Option<usize> {
@@ -439,6 +490,7 @@ impl GapModel {
                 gravity_sin: mass * axis.dot(axis.cross(d_perp).cross(gravity)),
                 subtree_mass_kg: mass,
                 com_radius_m: d_perp.length(),
+                coupling: 0.0,
             },
         }
     }

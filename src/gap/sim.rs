@@ -49,19 +49,40 @@ enum Event {
     Zone(f64),
 }
 
+/// The joint's inertia under `p`: the modelled one scaled, plus armature.
+fn inertia_of(p: &JointPhysics, terms: &JointTerms) -> f64 {
+    (terms.inertia * p.mass_scale + p.armature).max(1e-9)
+}
+
+/// The gravity effort under `p` (a heavier part weighs more).
+fn gravity_of(p: &JointPhysics, terms: &JointTerms, q: f64) -> f64 {
+    let g = if terms.gravity_cos == 0.0 && terms.gravity_sin == 0.0 { terms.gravity_const } else { terms.gravity(q) };
+    g * p.mass_scale
+}
+
 fn free_step(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64, h: f64) -> (f64, f64) {
-    let inertia = (terms.inertia * p.mass_scale).max(1e-9);
+    let inertia = inertia_of(p, terms);
     // Position forces at the predicted midpoint and trapezoidal damping: second order, so that a
     // stiff spring or a strong soft-close damper does not drift from the truth over seconds.
     let q_mid = q + 0.5 * h * v;
-    let gravity = if terms.gravity_cos == 0.0 && terms.gravity_sin == 0.0 { terms.gravity_const } else { terms.gravity(q_mid) };
-    let force = effort + gravity + p.position_effort(q_mid);
+    let force = effort + p.effort_offset + terms.coupling + gravity_of(p, terms, q_mid) + p.position_effort(q_mid);
     // Damping of the zone the step moves into (a start exactly on the engage position counts
     // the side the joint is heading to).
     let k = 0.5 * h * p.damping_at(q_mid) / inertia;
     let free = v * (1.0 - k) + h * force / inertia;
-    let friction_dv = h * p.friction / inertia;
-    let v_new = if free.abs() <= friction_dv { 0.0 } else { (free - friction_dv * free.signum()) / (1.0 + k) };
+    let v_new = if p.friction_shape.transition_speed > 0.0 {
+        // Smooth friction, linearised about v and taken implicitly: stable for any step even
+        // when the transition is much faster than the step.
+        let s = p.friction_shape.transition_speed;
+        let level = p.friction_level(v);
+        let slope = level / s * (1.0 - (v / s).tanh().powi(2));
+        let f0 = p.smooth_friction(v);
+        (free + h * (f0 + slope * v) / inertia) / (1.0 + k + h * slope / inertia)
+    } else {
+        let direction = if free == 0.0 { v } else { free };
+        let friction_dv = h * p.friction_level(direction) / inertia;
+        if free.abs() <= friction_dv { 0.0 } else { (free - friction_dv * free.signum()) / (1.0 + k) }
+    };
     // Trapezoidal position update: exact for piecewise-constant acceleration (the held effort).
     (q + 0.5 * h * (v + v_new), v_new)
 }
@@ -107,7 +128,8 @@ fn step_events(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64
                     let mut rebound = if into { -restitution * ve } else { ve };
                     // Pushed back into the stop, the bounces form a geometric series lasting
                     // 2|v|/(|a|(1 − e)): when that ends within this step the joint comes to rest.
-                    let a = (effort + terms.gravity(position) + p.position_effort(position)) / (terms.inertia * p.mass_scale).max(1e-9);
+                    let a = (effort + p.effort_offset + terms.coupling + gravity_of(p, terms, position) + p.position_effort(position))
+                        / inertia_of(p, terms);
                     let pushed = if up { a > 0.0 } else { a < 0.0 };
                     if into && pushed && 2.0 * rebound.abs() <= a.abs() * (1.0 - restitution).max(1e-3) * (h - at) {
                         rebound = 0.0;
@@ -182,6 +204,9 @@ mod tests {
             kind: DofKind::Continuous,
             damping: 0.0,
             friction: 0.0,
+            friction_shape: crate::gap::effects::FrictionShape::default(),
+            effort_offset: 0.0,
+            armature: 0.0,
             stiffness: 0.0,
             rest_position: 0.0,
             tilt_amplitude: 0.0,
