@@ -120,6 +120,16 @@ impl MultiBody {
         self.dof_count
     }
 
+    /// The same tree with body `body`'s inertia scaled by `s` (a heavier part).
+    #[must_use]
+    pub fn with_body_scaled(&self, body: usize, s: f64) -> Self {
+        let mut out = self.clone();
+        if let Some(b) = out.bodies.get_mut(body) {
+            b.inertia = b.inertia.scaled(s);
+        }
+        out
+    }
+
     /// The bodies, parents first.
     #[must_use]
     pub fn bodies(&self) -> &[Body] {

@@ -8,7 +8,9 @@
 //! fitted model, `plot` the SVG figures, `generate` recordings with concealed effects (different
 //! physics code: RK4 with event location) for tests and demos.
 
+pub mod chain;
 pub mod effects;
+pub mod effort;
 pub mod error;
 pub mod fit;
 pub mod generate;
@@ -20,6 +22,8 @@ pub mod recording;
 pub mod report;
 pub mod select;
 pub mod sim;
+pub mod smooth;
+mod effort_mode;
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -33,6 +37,7 @@ pub use model::{GapModel, load_model, parse_model};
 pub use recording::{Recording, parse_recording, read_recording};
 pub use report::{EffectReport, GapReport, JointSeries, Mismatch, RmsePair};
 
+use effort_mode::analyze_effort_space;
 use locate::{Span, mismatch_spans, noise_sigma, rmse_over};
 use report::{Conditions, FitSummary, HeldOut};
 use sim::SimInput;
@@ -63,9 +68,16 @@ struct JointOutcome {
     held: RmsePair,
     sq: (f64, f64, usize),
     series: JointSeries,
+    analysis: report::JointAnalysis,
 }
 
 /// Analyses a recording against a model: mismatches, effects, fit, held-out validation, series.
+///
+/// Each joint goes in one of two ways, chosen from what the recording holds: **effort space**
+/// ([`effort`]) for joints whose effort is recorded while every joint of the model has its
+/// position recorded (inverse dynamics of the whole tree gives the residual effort), **position
+/// space** ([`fit`], [`select`]) for the others (simulation of the joint, the recorded motion of
+/// the other joints driving it through the coupling efforts).
 pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<GapReport, GapError> {
     let dof_names: Vec<&str> = model.dofs().into_iter().map(|j| model.joints[j].name.as_str()).collect();
     let link_names: Vec<&str> = model.links.iter().map(|l| l.name.as_str()).collect();
@@ -87,14 +99,30 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
             notes.push(format!("joint {} is not observed: held at 0", model.joints[j].name));
         }
     }
-    let filled: Vec<Vec<f64>> =
-        (0..model.joints.len()).map(|j| observed.get(&j).map_or_else(|| vec![0.0; n], |q| observe::fill_gaps(q))).collect();
     let gravity = DVec3::from_array(rec.gravity_mps2);
     let t_split = rec.time_s[0] + (1.0 - cfg.held_out_fraction) * (rec.time_s[n - 1] - rec.time_s[0]);
-    let jobs: Vec<(usize, &Vec<f64>)> = observed.iter().map(|(j, q)| (*j, q)).collect();
-    let outcomes: Vec<JointOutcome> =
-        jobs.par_iter().map(|&(j, y)| analyze_joint(model, rec, cfg, j, y, &filled, gravity, t_split)).collect();
+    let effort_joints = effort_space_joints(model, rec, &observed);
+    let mut outcomes = if effort_joints.is_empty() {
+        Vec::new()
+    } else {
+        analyze_effort_space(model, rec, cfg, &observed, &effort_joints, gravity, t_split)?
+    };
+    let done: Vec<usize> = outcomes.iter().filter_map(|o| model.joint_index(&o.series.joint)).collect();
+    let filled: Vec<Vec<f64>> =
+        (0..model.joints.len()).map(|j| observed.get(&j).map_or_else(|| vec![0.0; n], |q| observe::fill_gaps(q))).collect();
+    let coupling = coupling_efforts(model, rec, &observed, gravity);
+    let jobs: Vec<(usize, &Vec<f64>)> = observed.iter().filter(|(j, _)| !done.contains(j)).map(|(j, q)| (*j, q)).collect();
+    let why = position_space_reason(model, rec, &observed);
+    outcomes.extend(jobs.par_iter().map(|&(j, y)| {
+        let mut o = analyze_joint(model, rec, cfg, j, y, &filled, coupling.as_ref().map(|c| c[j].as_slice()), gravity, t_split);
+        o.analysis.why.clone_from(&why);
+        o
+    }).collect::<Vec<_>>());
+    outcomes.sort_by_key(|o| model.joint_index(&o.series.joint));
+    Ok(assemble_report(cfg, notes, t_split, outcomes))
+}
 
+fn assemble_report(cfg: &GapConfig, notes: Vec<String>, t_split: f64, outcomes: Vec<JointOutcome>) -> GapReport {
     let mut report = GapReport {
         format: report::REPORT_FORMAT,
         mismatches: Vec::new(),
@@ -104,6 +132,7 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
         held_out: HeldOut { t_start: t_split, per_joint: std::collections::BTreeMap::default() },
         noise_sigma: std::collections::BTreeMap::default(),
         notes,
+        joints: std::collections::BTreeMap::default(),
         series: Vec::new(),
     };
     let (mut sb, mut sa, mut count) = (0.0, 0.0, 0usize);
@@ -111,7 +140,8 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
         let name = o.series.joint.clone();
         report.fit.per_joint.insert(name.clone(), o.all);
         report.held_out.per_joint.insert(name.clone(), o.held);
-        report.noise_sigma.insert(name, o.series.noise_sigma);
+        report.noise_sigma.insert(name.clone(), o.series.noise_sigma);
+        report.joints.insert(name, o.analysis);
         report.mismatches.extend(o.mismatches);
         report.effects.extend(o.effects);
         sb += o.sq.0;
@@ -122,7 +152,67 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     let c = count.max(1) as f64;
     (report.fit.rmse_before, report.fit.rmse_after) = ((sb / c).sqrt(), (sa / c).sqrt());
     report.mismatches.sort_by(|a, b| b.rmse.total_cmp(&a.rmse).then_with(|| a.joint.cmp(&b.joint)));
-    Ok(report)
+    report
+}
+
+/// Joints analysed in effort space: effort recorded, and every degree of freedom of the model
+/// observed (inverse dynamics needs the whole tree's motion).
+fn effort_space_joints(model: &GapModel, rec: &Recording, observed: &std::collections::BTreeMap<usize, Vec<f64>>) -> Vec<usize> {
+    let dofs = model.dofs();
+    if !dofs.iter().all(|j| observed.contains_key(j)) {
+        return Vec::new();
+    }
+    dofs.into_iter().filter(|&j| rec.joint_effort.contains_key(&model.joints[j].name)).collect()
+}
+
+fn position_space_reason(model: &GapModel, rec: &Recording, observed: &std::collections::BTreeMap<usize, Vec<f64>>) -> String {
+    let unobserved: Vec<&str> = model.dofs().into_iter().filter(|j| !observed.contains_key(j)).map(|j| model.joints[j].name.as_str()).collect();
+    if unobserved.is_empty() {
+        "no effort recorded for this joint: its motion is simulated and fitted".into()
+    } else if rec.joint_effort.is_empty() {
+        "no effort recorded: its motion is simulated and fitted".into()
+    } else {
+        format!("joints {} are not observed, so inverse dynamics is not possible: its motion is simulated and fitted", unobserved.join(", "))
+    }
+}
+
+/// Per model joint, per sample: the effort on it from the recorded motion of the other joints
+/// (their accelerations and the Coriolis/centrifugal terms), which a 1-DoF replay would drop.
+/// None for a one-joint model.
+fn coupling_efforts(
+    model: &GapModel,
+    rec: &Recording,
+    observed: &std::collections::BTreeMap<usize, Vec<f64>>,
+    gravity: DVec3,
+) -> Option<Vec<Vec<f64>>> {
+    let dofs = model.dofs();
+    if dofs.len() < 2 {
+        return None;
+    }
+    let (tree, _) = model.multibody().ok()?;
+    let n = rec.time_s.len();
+    let smoothed: Vec<Vec<[f64; 3]>> = dofs
+        .iter()
+        .map(|j| {
+            observed.get(j).map_or_else(|| vec![[0.0; 3]; n], |y| smooth::local_cubic(&rec.time_s, &observe::fill_gaps(y), smooth::DEFAULT_HALF_WIDTH_S))
+        })
+        .collect();
+    let mut out = vec![vec![0.0; n]; model.joints.len()];
+    let (mut q, mut qd, mut qdd) = (vec![0.0; dofs.len()], vec![0.0; dofs.len()], vec![0.0; dofs.len()]);
+    for i in 0..n {
+        for d in 0..dofs.len() {
+            let s = smoothed[d][i];
+            (q[d], qd[d], qdd[d]) = if s.iter().all(|v| v.is_finite()) { (s[0], s[1], s[2]) } else { (0.0, 0.0, 0.0) };
+        }
+        let held = tree.inverse_dynamics(&q, &[], &[], gravity);
+        for (d, &j) in dofs.iter().enumerate() {
+            let mut others = qdd.clone();
+            others[d] = 0.0;
+            let moving = tree.inverse_dynamics(&q, &qd, &others, gravity);
+            out[j][i] = -(moving[d] - held[d]);
+        }
+    }
+    Some(out)
 }
 
 fn open_loop_from(input: &SimInput<'_>, physics: &JointPhysics, start: usize, state: (f64, f64)) -> Vec<f64> {
@@ -150,6 +240,7 @@ fn analyze_joint(
     j: usize,
     y: &[f64],
     filled: &[Vec<f64>],
+    coupling: Option<&[f64]>,
     gravity: DVec3,
     t_split: f64,
 ) -> JointOutcome {
@@ -161,7 +252,9 @@ fn analyze_joint(
             for (c, s) in config.iter_mut().zip(filled) {
                 *c = s[i];
             }
-            model.joint_terms(j, &config, gravity)
+            let mut t = model.joint_terms(j, &config, gravity);
+            t.coupling = coupling.map_or(0.0, |c| c[i]);
+            t
         })
         .collect();
     let effort: Vec<f64> = (0..n).map(|i| rec.effort(&joint.name, i)).collect();
@@ -252,7 +345,8 @@ fn analyze_joint(
         simulated_after: after_sim,
         noise_sigma: sigma,
     };
-    JointOutcome { mismatches, effects, all: all_pair, held, sq: (sb, sa, c), series }
+    let analysis = report::JointAnalysis { mode: "position".into(), ..report::JointAnalysis::default() };
+    JointOutcome { mismatches, effects, all: all_pair, held, sq: (sb, sa, c), series, analysis }
 }
 
 fn describe_mismatch(rec: &Recording, joint: &model::GapJoint, y: &[f64], derivs: &[[f64; 3]], residual: &[f64], span: Span) -> Mismatch {

@@ -111,6 +111,24 @@ pub struct JointSeries {
     pub noise_sigma: f64,
 }
 
+/// How one joint was analysed, and what was weighed and left out.
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct JointAnalysis {
+    /// "effort" (inverse dynamics of the whole tree, residual effort regressed on the effects'
+    /// features) or "position" (simulation of the joint, multiple shooting).
+    pub mode: String,
+    /// Why this mode.
+    pub why: String,
+    /// RMS of the joint's own effort over the analysed samples (N·m or N; effort mode).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub effort_rms: Option<f64>,
+    /// Held-out RMS residual effort of the model as written and of the fitted one (effort mode).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub effort_residual: Option<RmsePair>,
+    /// Terms considered and not reported, each with the reason.
+    pub rejected: Vec<String>,
+}
+
 /// The whole report. Serializes to `report.json`; `series` and `fitted` stay in memory.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct GapReport {
@@ -130,6 +148,8 @@ pub struct GapReport {
     pub noise_sigma: BTreeMap<String, f64>,
     /// Assumptions (primitive masses, skipped joints…).
     pub notes: Vec<String>,
+    /// Per joint: the way in (effort or position space) and what was rejected.
+    pub joints: BTreeMap<String, JointAnalysis>,
     /// Plot series, one per analysed joint.
     #[serde(skip)]
     pub series: Vec<JointSeries>,

@@ -1,0 +1,850 @@
+//! Effort-space identification ("IDIM", Khalil & Dombre; Gautier): for joints whose effort is
+//! recorded while every joint of the model has its position recorded, the residual effort
+//! `r = τ_measured − τ_model(q, q̇, q̈)` (inverse dynamics of the whole tree, [`crate::dynamics`])
+//! is regressed on the effects' features. Most joint physics is linear in its parameters there
+//! (viscous, Coulomb at a given transition speed, offset, armature, a heavier part, a spring, a
+//! tilt, soft close at a given engage position), so every candidate model is one small weighted
+//! least-squares solve over precomputed Gram matrices, and the choice between them is made on
+//! data not used to fit them: contiguous time blocks, each held out in turn.
+//!
+//! A term is kept only when it lowers the held-out error of its joint by [`SelectionRules`]'s
+//! margin in most folds *and* its effort matters next to the joint's own efforts over the motion;
+//! everything else (engine regularisation, integrator differences, the published model's own
+//! error) stays unnamed. What remains material after the best model is reported once per joint
+//! as `unknown`, with its size in effort units.
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+
+use super::effects::{Effect, EffectKind};
+use super::model::{DofKind, GapModel};
+use super::smooth::local_cubic;
+use crate::dynamics::MultiBody;
+use crate::linalg::solve_spd;
+
+/// The thresholds of selection in effort space, in one place.
+#[derive(Debug, Clone)]
+pub struct SelectionRules {
+    /// Contiguous time blocks for cross-validation and the jackknife.
+    pub folds: usize,
+    /// Relative cut of the joint's held-out squared error a new term must bring.
+    pub min_cv_gain: f64,
+    /// Share of the folds in which the term must lower the held-out error.
+    pub min_fold_share: f64,
+    /// RMS effort of a term over the motion, as a share of the joint's own RMS effort, below
+    /// which it is "physically nothing" and not reported.
+    pub min_effort_share: f64,
+    /// Residual RMS (share of the joint's own RMS effort) left after the best model above which
+    /// `unknown` is reported.
+    pub unknown_share: f64,
+    /// Plausible range of `mass_scale`: a documented part that weighs less than the lower or more
+    /// than the upper bound times its model is a wrong model, not a missing effect; such a fit is
+    /// not reported as a heavier part.
+    pub mass_scale_range: (f64, f64),
+    /// Half-width of the first, wide smoothing pass that measures the motion's frequency, s (the
+    /// window used is then chosen from it, [`smoothing_half_width`]).
+    pub smoothing_half_width_s: f64,
+}
+
+impl Default for SelectionRules {
+    fn default() -> Self {
+        Self {
+            folds: 8,
+            min_cv_gain: 0.02,
+            min_fold_share: 0.75,
+            min_effort_share: 0.03,
+            unknown_share: 0.2,
+            smoothing_half_width_s: 0.1,
+            mass_scale_range: (0.5, 3.0),
+        }
+    }
+}
+
+/// Smoothed signals of the whole model, one entry per degree of freedom (model dof order).
+#[derive(Debug, Clone)]
+pub struct Signals {
+    /// Sample times, s.
+    pub time_s: Vec<f64>,
+    /// Position, velocity, acceleration per dof and sample.
+    pub q: Vec<Vec<[f64; 3]>>,
+    /// Smoothed measured effort per dof (None without an effort column).
+    pub effort: Vec<Option<Vec<f64>>>,
+    /// Whether sample i can be used: every signal finite, not within a window of either end.
+    pub usable: Vec<bool>,
+    /// The smoothing half-width used, s.
+    pub half_width_s: f64,
+}
+
+/// Widest smoothing half-width, s.
+const MAX_HALF_WIDTH_S: f64 = 0.15;
+
+/// Cut-off of the smoothing as a multiple of the motion's dominant frequency.
+const CUTOFF_OVER_MOTION: f64 = 5.0;
+
+/// The smoothing window for these positions: a cubic's cut-off at [`CUTOFF_OVER_MOTION`] × the
+/// fastest joint's dominant frequency (RMS speed over RMS excursion, from a first wide pass), so
+/// that the acceleration keeps the motion and loses the encoder noise. Schafer's rule for
+/// Savitzky–Golay filters: f_c / f_Nyquist ≈ (order + 1) / (3.2 M − 4.6), M the half-width in
+/// samples. Between 3 samples and [`MAX_HALF_WIDTH_S`].
+#[must_use]
+pub fn smoothing_half_width(time_s: &[f64], positions: &[Vec<f64>], first_pass_s: f64) -> f64 {
+    let n = time_s.len();
+    if n < 3 {
+        return first_pass_s;
+    }
+    let dt = (time_s[n - 1] - time_s[0]) / (n - 1) as f64;
+    let mut f_motion: f64 = 0.0;
+    for y in positions {
+        let s = local_cubic(time_s, y, first_pass_s);
+        let q: Vec<f64> = s.iter().map(|x| x[0]).filter(|v| v.is_finite()).collect();
+        let mean = q.iter().sum::<f64>() / q.len().max(1) as f64;
+        let q_rms = rms(q.iter().map(|v| v - mean));
+        let v_rms = rms(s.iter().map(|x| x[1]));
+        let a_rms = rms(s.iter().map(|x| x[2]));
+        // Two estimates of the angular frequency; the larger keeps fast swings of a motion with
+        // a large excursion (a swing-up) unattenuated.
+        if q_rms > 1e-9 {
+            f_motion = f_motion.max(v_rms / (std::f64::consts::TAU * q_rms));
+        }
+        if v_rms > 1e-9 {
+            f_motion = f_motion.max(a_rms / (std::f64::consts::TAU * v_rms));
+        }
+    }
+    if f_motion <= 0.0 {
+        return first_pass_s;
+    }
+    let f_nyquist = 0.5 / dt.max(1e-9);
+    let f_cut = (CUTOFF_OVER_MOTION * f_motion).min(0.5 * f_nyquist);
+    let half_samples = (4.0 * f_nyquist / f_cut + 4.6) / 3.2;
+    (half_samples * dt).clamp(3.0 * dt, MAX_HALF_WIDTH_S.max(3.0 * dt))
+}
+
+/// Smooths every dof's position and every recorded effort with the same local cubic. Efforts
+/// hold until the next sample (spec §2), so an effort sample counts at the middle of its hold.
+#[must_use]
+pub fn signals(time_s: &[f64], positions: &[Vec<f64>], efforts: &[Option<Vec<f64>>], half_width_s: f64) -> Signals {
+    let n = time_s.len();
+    let q: Vec<Vec<[f64; 3]>> = positions.iter().map(|y| local_cubic(time_s, y, half_width_s)).collect();
+    let mid: Vec<f64> = (0..n).map(|i| if i + 1 < n { 0.5 * (time_s[i] + time_s[i + 1]) } else { time_s[i] }).collect();
+    let effort: Vec<Option<Vec<f64>>> = efforts
+        .iter()
+        .map(|e| {
+            e.as_ref().map(|e| {
+                let at_mid = local_cubic(&mid, e, half_width_s);
+                // Evaluate at the sample times: the hold's middle is half a step later.
+                (0..n).map(|i| at_mid[i][0] - at_mid[i][1] * (mid[i] - time_s[i])).collect()
+            })
+        })
+        .collect();
+    let (t0, t1) = (time_s.first().copied().unwrap_or(0.0), time_s.last().copied().unwrap_or(0.0));
+    let usable = (0..n)
+        .map(|i| {
+            time_s[i] - t0 >= half_width_s
+                && t1 - time_s[i] >= half_width_s
+                && q.iter().all(|d| d[i].iter().all(|v| v.is_finite()))
+                && effort.iter().flatten().all(|e| e[i].is_finite())
+        })
+        .collect();
+    Signals { time_s: time_s.to_vec(), q, effort, usable, half_width_s }
+}
+
+/// One candidate term on one joint: its kind, its hyper-parameters, its regressor columns.
+#[derive(Debug, Clone)]
+struct Candidate {
+    /// Effort row (index into the identified joints).
+    row: usize,
+    kind: EffectKind,
+    /// Fixed nonlinear parameters: transition speed, Stribeck speed, engage position…
+    hyper: Vec<f64>,
+    /// Asymmetric Coulomb (two levels).
+    asymmetric: bool,
+    /// Columns (indices into the column store).
+    columns: Vec<usize>,
+    /// Candidates of one family replace each other (one friction law per joint…).
+    family: Family,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Family {
+    Friction,
+    Viscous,
+    /// Constant efforts: an offset and a spring's rest position share the constant column.
+    Constant,
+    Inertia,
+    Mass,
+    Tilt,
+    SoftClose,
+}
+
+/// A regressor column: its values on each effort row it touches (NaN = not used).
+#[derive(Debug, Clone)]
+struct Column {
+    rows: BTreeMap<usize, Vec<f64>>,
+}
+
+/// Per row and fold: the Gram matrix of the columns touching the row, their products with the
+/// residual and the residual's square, all weighted.
+#[derive(Debug, Clone)]
+struct RowGram {
+    /// Column ids touching this row.
+    columns: Vec<usize>,
+    /// Per fold: gram (len² row-major), c·r, r·r, sample count.
+    folds: Vec<(Vec<f64>, Vec<f64>, f64, usize)>,
+}
+
+/// One identified joint (an effort row).
+#[derive(Debug, Clone)]
+pub struct RowInfo {
+    /// Model joint index.
+    pub joint: usize,
+    /// Dof index.
+    pub dof: usize,
+    /// Residual effort of the model as written, per sample (NaN where not used).
+    pub residual: Vec<f64>,
+    /// RMS of the joint's own effort over the used samples (the practical scale).
+    pub effort_rms: f64,
+}
+
+/// What effort-space identification found for one joint.
+#[derive(Debug, Clone)]
+pub struct JointFinding {
+    /// Model joint index.
+    pub joint: usize,
+    /// Effects in the effort-mode parameter layout (`coulomb_friction`: friction, transition
+    /// speed, reverse level or NaN).
+    pub effects: Vec<Effect>,
+    /// One σ of each effect's parameters (jackknife over the folds).
+    pub param_std: Vec<Vec<f64>>,
+    /// Confidence of each effect.
+    pub confidence: Vec<f64>,
+    /// RMS effort of each effect over the motion.
+    pub effect_rms: Vec<f64>,
+    /// Held-out RMS residual effort before (model as written) and after.
+    pub cv_rms_before: f64,
+    /// After.
+    pub cv_rms_after: f64,
+    /// The joint's own RMS effort.
+    pub effort_rms: f64,
+    /// Residual effort before and after, per sample (NaN where not used).
+    pub residual_before: Vec<f64>,
+    /// After.
+    pub residual_after: Vec<f64>,
+    /// Terms considered and not reported, with the reason.
+    pub rejected: Vec<String>,
+}
+
+/// The whole effort-space problem.
+pub struct EffortProblem<'a> {
+    model: &'a GapModel,
+    rules: SelectionRules,
+    rows: Vec<RowInfo>,
+    columns: Vec<Column>,
+    candidates: Vec<Candidate>,
+    grams: Vec<RowGram>,
+    fold_of: Vec<usize>,
+    weights: Vec<f64>,
+    used: Vec<Vec<bool>>,
+}
+
+/// The effort the model as written needs at every sample, per dof: inverse dynamics plus the
+/// URDF's own `<dynamics>`; and per body the effort of its inertia alone (mass regressors).
+struct ModelEfforts {
+    tau: Vec<Vec<f64>>,
+    /// body → per dof, per sample.
+    body_tau: BTreeMap<usize, Vec<Vec<f64>>>,
+}
+
+fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVec3, bodies: &[usize]) -> ModelEfforts {
+    let dofs = model.dofs();
+    let n = sig.time_s.len();
+    let nd = dofs.len();
+    let mut tau = vec![vec![f64::NAN; n]; nd];
+    let mut body_tau: BTreeMap<usize, Vec<Vec<f64>>> = bodies.iter().map(|&b| (b, vec![vec![f64::NAN; n]; nd])).collect();
+    let (mut q, mut qd, mut qdd) = (vec![0.0; nd], vec![0.0; nd], vec![0.0; nd]);
+    for i in (0..n).filter(|&i| sig.usable[i]) {
+        for d in 0..nd {
+            [q[d], qd[d], qdd[d]] = sig.q[d][i];
+        }
+        let k = tree.kinematics(&q, &qd, &qdd, gravity);
+        let all = tree.efforts_with(&k, |b| Some(tree.bodies()[b].inertia));
+        for (d, &j) in dofs.iter().enumerate() {
+            let joint = &model.joints[j];
+            let v = qd[d];
+            let speed_scale = 1e-3;
+            tau[d][i] = all[d] + joint.damping * v + joint.friction * (v / speed_scale).tanh();
+        }
+        for (&b, out) in &mut body_tau {
+            let one = tree.efforts_with(&k, |x| (x == b).then(|| tree.bodies()[x].inertia));
+            for d in 0..nd {
+                out[d][i] = one[d];
+            }
+        }
+    }
+    ModelEfforts { tau, body_tau }
+}
+
+/// The moving part of a joint: its child body and the bodies welded to it.
+fn moving_part(tree: &MultiBody, body: usize) -> Vec<usize> {
+    let mut out = vec![body];
+    for (i, b) in tree.bodies().iter().enumerate() {
+        if b.dof.is_none() && b.parent.is_some_and(|p| out.contains(&p)) {
+            out.push(i);
+        }
+    }
+    out
+}
+
+fn rms(v: impl Iterator<Item = f64>) -> f64 {
+    let (s, c) = v.filter(|x| x.is_finite()).fold((0.0, 0usize), |(s, c), x| (s + x * x, c + 1));
+    if c == 0 { 0.0 } else { (s / c as f64).sqrt() }
+}
+
+impl<'a> EffortProblem<'a> {
+    /// Sets up the rows (`effort_joints`: model joint indices with a recorded effort), the
+    /// candidate columns and their Gram matrices. `excluded[row][i]` marks samples in contact
+    /// with a stop.
+    #[must_use]
+    pub fn new(
+        model: &'a GapModel,
+        sig: &Signals,
+        gravity: DVec3,
+        effort_joints: &[usize],
+        excluded: &[Vec<bool>],
+        train: &[bool],
+        rules: SelectionRules,
+    ) -> Option<Self> {
+        let (tree, body_of_link) = model.multibody().ok()?;
+        let dofs = model.dofs();
+        let n = sig.time_s.len();
+        let part_of: Vec<Vec<usize>> =
+            effort_joints.iter().map(|&j| body_of_link[model.joints[j].child].map(|b| moving_part(&tree, b)).unwrap_or_default()).collect();
+        let mut bodies: Vec<usize> = part_of.iter().flatten().copied().collect();
+        bodies.sort_unstable();
+        bodies.dedup();
+        let me = model_efforts(model, &tree, sig, gravity, &bodies);
+        let mut rows = Vec::new();
+        let mut used = Vec::new();
+        for (r, &j) in effort_joints.iter().enumerate() {
+            let d = dofs.iter().position(|&x| x == j)?;
+            let measured = sig.effort[d].as_ref()?;
+            let ok: Vec<bool> = (0..n).map(|i| sig.usable[i] && train[i] && !excluded[r][i] && me.tau[d][i].is_finite()).collect();
+            let residual: Vec<f64> = (0..n).map(|i| if ok[i] { measured[i] - me.tau[d][i] } else { f64::NAN }).collect();
+            let own = rms((0..n).filter(|&i| ok[i]).map(|i| measured[i]));
+            let model_rms = rms((0..n).filter(|&i| ok[i]).map(|i| me.tau[d][i]));
+            rows.push(RowInfo { joint: j, dof: d, residual, effort_rms: own.max(model_rms) });
+            used.push(ok);
+        }
+        if used.iter().all(|u| u.iter().filter(|&&x| x).count() < 50) {
+            return None;
+        }
+        let mut problem = Self {
+            model,
+            rules,
+            rows,
+            columns: Vec::new(),
+            candidates: Vec::new(),
+            grams: Vec::new(),
+            fold_of: Vec::new(),
+            weights: Vec::new(),
+            used,
+        };
+        problem.fold_of = problem.assign_folds(sig);
+        problem.build_candidates(sig, &tree, &me, &part_of);
+        problem.weights = problem.rows.iter().map(|r| 1.0 / robust_scale(&r.residual).max(1e-9).powi(2)).collect();
+        problem.build_grams();
+        Some(problem)
+    }
+
+    /// Contiguous blocks of equal duration over the used samples.
+    fn assign_folds(&self, sig: &Signals) -> Vec<usize> {
+        let n = sig.time_s.len();
+        let any: Vec<usize> = (0..n).filter(|&i| self.used.iter().any(|u| u[i])).collect();
+        let (Some(&a), Some(&b)) = (any.first(), any.last()) else { return vec![0; n] };
+        let (t0, t1) = (sig.time_s[a], sig.time_s[b]);
+        let k = self.rules.folds.max(2);
+        (0..n).map(|i| (((sig.time_s[i] - t0) / (t1 - t0).max(1e-12) * k as f64) as usize).min(k - 1)).collect()
+    }
+}
+
+/// 1.4826 · MAD of the finite values.
+fn robust_scale(v: &[f64]) -> f64 {
+    let mut x: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if x.is_empty() {
+        return 0.0;
+    }
+    x.sort_by(f64::total_cmp);
+    let med = x[x.len() / 2];
+    let mut d: Vec<f64> = x.iter().map(|v| (v - med).abs()).collect();
+    d.sort_by(f64::total_cmp);
+    1.4826 * d[d.len() / 2]
+}
+
+/// Multipliers of a joint's RMS speed for the transition speeds tried (smooth Coulomb).
+const TRANSITION_GRID: [f64; 5] = [0.002, 0.01, 0.03, 0.1, 0.3];
+/// Multipliers of the RMS speed for the Stribeck speeds tried.
+const STRIBECK_GRID: [f64; 3] = [0.05, 0.15, 0.4];
+/// Shares of the travel from the closed end for the soft-close engage positions tried.
+const ENGAGE_GRID: [f64; 5] = [0.1, 0.2, 0.35, 0.5, 0.7];
+
+impl EffortProblem<'_> {
+    fn push_column(&mut self, row: usize, values: Vec<f64>) -> usize {
+        self.columns.push(Column { rows: BTreeMap::from([(row, values)]) });
+        self.columns.len() - 1
+    }
+
+    fn push(&mut self, row: usize, kind: EffectKind, family: Family, hyper: Vec<f64>, asymmetric: bool, cols: Vec<Vec<f64>>) {
+        let columns = cols.into_iter().map(|c| self.push_column(row, c)).collect();
+        self.candidates.push(Candidate { row, kind, hyper, asymmetric, columns, family });
+    }
+
+    /// Every candidate term of every row, with its regressor columns.
+    fn build_candidates(&mut self, sig: &Signals, tree: &MultiBody, me: &ModelEfforts, part_of: &[Vec<usize>]) {
+        let n = sig.time_s.len();
+        let chain = self.rows.len() > 1;
+        for r in 0..self.rows.len() {
+            let (j, d) = (self.rows[r].joint, self.rows[r].dof);
+            let joint = &self.model.joints[j];
+            let ok = self.used[r].clone();
+            let col = |f: &dyn Fn([f64; 3]) -> f64| -> Vec<f64> { (0..n).map(|i| if ok[i] { f(sig.q[d][i]) } else { f64::NAN }).collect() };
+            let v_rms = rms((0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][1])).max(1e-6);
+            let qs: Vec<f64> = (0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][0]).collect();
+            let (lo, hi) = qs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
+            for m in TRANSITION_GRID {
+                let vs = m * v_rms;
+                self.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], false, vec![col(&|x| (x[1] / vs).tanh())]);
+                let pos = col(&|x| if x[1] > 0.0 { (x[1] / vs).tanh() } else { 0.0 });
+                let neg = col(&|x| if x[1] < 0.0 { (x[1] / vs).tanh() } else { 0.0 });
+                self.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], true, vec![pos, neg]);
+            }
+            let vt = TRANSITION_GRID[1] * v_rms;
+            for m in STRIBECK_GRID {
+                let ss = m * v_rms;
+                let base = col(&|x| (x[1] / vt).tanh());
+                let extra = col(&|x| (-(x[1] / ss).powi(2)).exp() * (x[1] / vt).tanh());
+                self.push(r, EffectKind::StribeckFriction, Family::Friction, vec![ss], false, vec![base, extra]);
+            }
+            self.push(r, EffectKind::ViscousDamping, Family::Viscous, Vec::new(), false, vec![col(&|x| x[1])]);
+            self.push(r, EffectKind::EffortOffset, Family::Constant, Vec::new(), false, vec![col(&|_| -1.0)]);
+            self.push(r, EffectKind::Spring, Family::Constant, Vec::new(), false, vec![col(&|x| x[0]), col(&|_| -1.0)]);
+            // A motor's rotor is the likelier extra inertia of a joint in an actuated chain, a
+            // heavier part that of a single pushed joint: when the two cannot be told apart
+            // (gravity does no work on the joint), the earlier candidate wins the tie.
+            let mass = self.mass_candidate(r, me, part_of, n);
+            if chain {
+                self.push(r, EffectKind::Armature, Family::Inertia, Vec::new(), false, vec![col(&|x| x[2])]);
+                self.candidates.extend(mass);
+            } else {
+                self.candidates.extend(mass);
+                self.push(r, EffectKind::Armature, Family::Inertia, Vec::new(), false, vec![col(&|x| x[2])]);
+            }
+            let single_dof = tree.dof_count() == 1;
+            if joint.kind.is_rotational() && single_dof {
+                self.push(r, EffectKind::GravityTilt, Family::Tilt, Vec::new(), false, vec![col(&|x| x[0].sin()), col(&|x| -x[0].cos())]);
+            }
+            if joint.kind != DofKind::Continuous && hi > lo {
+                let closed = joint.lower.unwrap_or(0.0);
+                let far = if (hi - closed).abs() >= (lo - closed).abs() { hi } else { lo };
+                for frac in ENGAGE_GRID {
+                    let engage = closed + frac * (far - closed);
+                    let inside = move |q: f64| (q - closed) * (engage - closed) >= 0.0 && (q - closed).abs() <= (engage - closed).abs();
+                    let c = col(&|x| if inside(x[0]) { x[1] } else { 0.0 });
+                    self.push(r, EffectKind::SoftClose, Family::SoftClose, vec![engage], false, vec![c]);
+                }
+            }
+        }
+    }
+
+    /// The heavier-part candidate of row r: the effort of its moving part's inertia on every
+    /// identified joint (a heavier forearm loads the shoulder too).
+    fn mass_candidate(&mut self, r: usize, me: &ModelEfforts, part_of: &[Vec<usize>], n: usize) -> Option<Candidate> {
+        if part_of[r].is_empty() {
+            return None;
+        }
+        let mut rows = BTreeMap::new();
+        for (rr, info) in self.rows.iter().enumerate() {
+            let values: Vec<f64> = (0..n)
+                .map(|i| if self.used[rr][i] { part_of[r].iter().map(|b| me.body_tau[b][info.dof][i]).sum() } else { f64::NAN })
+                .collect();
+            if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
+                rows.insert(rr, values);
+            }
+        }
+        rows.get(&r)?;
+        self.columns.push(Column { rows });
+        Some(Candidate {
+            row: r,
+            kind: EffectKind::MassScale,
+            hyper: Vec::new(),
+            asymmetric: false,
+            columns: vec![self.columns.len() - 1],
+            family: Family::Mass,
+        })
+    }
+
+    fn build_grams(&mut self) {
+        let k = self.rules.folds.max(2);
+        self.grams = (0..self.rows.len())
+            .map(|r| {
+                let columns: Vec<usize> = (0..self.columns.len()).filter(|&c| self.columns[c].rows.contains_key(&r)).collect();
+                let m = columns.len();
+                let mut folds = vec![(vec![0.0; m * m], vec![0.0; m], 0.0, 0usize); k];
+                let values: Vec<&Vec<f64>> = columns.iter().map(|&c| &self.columns[c].rows[&r]).collect();
+                let w = self.weights[r];
+                let mut phi = vec![0.0; m];
+                for (i, &res) in self.rows[r].residual.iter().enumerate() {
+                    if !self.used[r][i] || !res.is_finite() {
+                        continue;
+                    }
+                    for (a, v) in values.iter().enumerate() {
+                        phi[a] = if v[i].is_finite() { v[i] } else { 0.0 };
+                    }
+                    let f = &mut folds[self.fold_of[i]];
+                    for a in 0..m {
+                        if phi[a] == 0.0 {
+                            continue;
+                        }
+                        f.1[a] += w * phi[a] * res;
+                        for b in a..m {
+                            f.0[a * m + b] += w * phi[a] * phi[b];
+                        }
+                    }
+                    f.2 += w * res * res;
+                    f.3 += 1;
+                }
+                for f in &mut folds {
+                    for a in 0..m {
+                        for b in 0..a {
+                            f.0[a * m + b] = f.0[b * m + a];
+                        }
+                    }
+                }
+                RowGram { columns, folds }
+            })
+            .collect();
+    }
+}
+
+/// A model (a set of candidates) evaluated by cross-validation.
+#[derive(Debug, Clone)]
+struct Evaluation {
+    /// Held-out weighted squared error per row and fold.
+    fold_sse: Vec<Vec<f64>>,
+    /// Parameters fitted on all folds, per column id.
+    theta: BTreeMap<usize, f64>,
+    /// Parameters fitted without each fold (jackknife), per column id.
+    theta_without: Vec<BTreeMap<usize, f64>>,
+}
+
+impl Evaluation {
+    fn row_sse(&self, r: usize) -> f64 {
+        self.fold_sse[r].iter().sum()
+    }
+}
+
+impl EffortProblem<'_> {
+    fn columns_of(&self, set: &[usize]) -> Vec<usize> {
+        let mut cols: Vec<usize> = set.iter().flat_map(|&c| self.candidates[c].columns.iter().copied()).collect();
+        cols.sort_unstable();
+        cols.dedup();
+        cols
+    }
+
+    /// Weighted least squares of the columns of `set` on the folds other than `skip` (None: all).
+    fn solve(&self, cols: &[usize], skip: Option<usize>) -> Vec<f64> {
+        let p = cols.len();
+        let mut a = vec![0.0; p * p];
+        let mut b = vec![0.0; p];
+        for g in &self.grams {
+            let local: Vec<(usize, usize)> =
+                g.columns.iter().enumerate().filter_map(|(li, c)| cols.iter().position(|x| x == c).map(|gi| (li, gi))).collect();
+            let m = g.columns.len();
+            for (k, f) in g.folds.iter().enumerate() {
+                if Some(k) == skip {
+                    continue;
+                }
+                for &(la, ga) in &local {
+                    b[ga] += f.1[la];
+                    for &(lb, gb) in &local {
+                        a[ga * p + gb] += f.0[la * m + lb];
+                    }
+                }
+            }
+        }
+        // A whisper of ridge keeps exactly collinear columns (look-alike kinds) solvable.
+        for i in 0..p {
+            a[i * p + i] += 1e-9 * a[i * p + i] + 1e-300;
+        }
+        solve_spd(&a, &b, p).unwrap_or_else(|| vec![0.0; p])
+    }
+
+    fn evaluate(&self, set: &[usize]) -> Evaluation {
+        let cols = self.columns_of(set);
+        let k = self.rules.folds.max(2);
+        let mut fold_sse = vec![vec![0.0; k]; self.rows.len()];
+        let mut theta_without = Vec::with_capacity(k);
+        for fold in 0..k {
+            let theta = self.solve(&cols, Some(fold));
+            for (r, g) in self.grams.iter().enumerate() {
+                let (gram, cr, rr, _) = &g.folds[fold];
+                let m = g.columns.len();
+                let local: Vec<(usize, f64)> = g
+                    .columns
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(li, c)| cols.iter().position(|x| x == c).map(|gi| (li, theta[gi])))
+                    .collect();
+                let mut sse = *rr;
+                for &(la, ta) in &local {
+                    sse -= 2.0 * ta * cr[la];
+                    for &(lb, tb) in &local {
+                        sse += ta * tb * gram[la * m + lb];
+                    }
+                }
+                fold_sse[r][fold] = sse.max(0.0);
+            }
+            theta_without.push(cols.iter().copied().zip(theta).collect());
+        }
+        let theta = cols.iter().copied().zip(self.solve(&cols, None)).collect();
+        Evaluation { fold_sse, theta, theta_without }
+    }
+
+    /// Rows whose fit a candidate changes.
+    fn rows_of(&self, c: usize) -> Vec<usize> {
+        self.candidates[c].columns.iter().flat_map(|&col| self.columns[col].rows.keys().copied()).collect::<std::collections::BTreeSet<_>>().into_iter().collect()
+    }
+
+    /// RMS effort of candidate c's term on its own row under `theta`.
+    fn term_rms(&self, c: usize, theta: &BTreeMap<usize, f64>) -> f64 {
+        let cand = &self.candidates[c];
+        let n = self.rows[cand.row].residual.len();
+        rms((0..n).filter(|&i| self.used[cand.row][i]).map(|i| {
+            cand.columns.iter().map(|col| theta.get(col).copied().unwrap_or(0.0) * self.columns[*col].rows[&cand.row][i]).sum::<f64>()
+        }))
+    }
+}
+
+/// How a candidate fared against the current model.
+#[derive(Debug, Clone, Copy)]
+struct Verdict {
+    /// Relative cut of the held-out error on the rows it touches.
+    gain: f64,
+    /// Share of the folds where it lowered the held-out error.
+    fold_share: f64,
+    /// Its RMS effort over the joint's RMS effort.
+    effort_share: f64,
+    /// Its fitted parameters are physical.
+    plausible: bool,
+}
+
+trait NanOrNonNegative {
+    fn is_nan_or_nonneg(self) -> bool;
+}
+
+impl NanOrNonNegative for f64 {
+    fn is_nan_or_nonneg(self) -> bool {
+        self.is_nan() || self >= 0.0
+    }
+}
+
+impl EffortProblem<'_> {
+    /// `set` with `c` added, replacing the member of c's family on c's joint.
+    fn with(&self, set: &[usize], c: usize) -> Vec<usize> {
+        let cand = &self.candidates[c];
+        let mut out: Vec<usize> =
+            set.iter().copied().filter(|&x| !(self.candidates[x].row == cand.row && self.candidates[x].family == cand.family)).collect();
+        out.push(c);
+        out
+    }
+
+    /// Compares `after` with `before` on the rows `rows`.
+    fn verdict(&self, before: &Evaluation, after: &Evaluation, rows: &[usize], c: usize) -> Verdict {
+        let k = self.rules.folds.max(2);
+        let sum = |e: &Evaluation| rows.iter().map(|&r| e.row_sse(r)).sum::<f64>();
+        let (b, a) = (sum(before), sum(after));
+        let better = (0..k)
+            .filter(|&f| rows.iter().map(|&r| after.fold_sse[r][f]).sum::<f64>() < rows.iter().map(|&r| before.fold_sse[r][f]).sum::<f64>())
+            .count();
+        let row = self.candidates[c].row;
+        Verdict {
+            gain: if b > 0.0 { (b - a) / b } else { 0.0 },
+            fold_share: better as f64 / k as f64,
+            effort_share: self.term_rms(c, &after.theta) / self.rows[row].effort_rms.max(1e-12),
+            plausible: self.plausible(c, &after.theta),
+        }
+    }
+
+    fn passes(&self, v: &Verdict) -> bool {
+        v.gain >= self.rules.min_cv_gain
+            && v.fold_share >= self.rules.min_fold_share
+            && v.effort_share >= self.rules.min_effort_share
+            && v.plausible
+    }
+
+    /// Whether the fitted parameters of candidate c are physical (a heavier part within the
+    /// plausible range, non-negative friction and damping levels).
+    fn plausible(&self, c: usize, theta: &BTreeMap<usize, f64>) -> bool {
+        let e = self.effect_of(c, theta);
+        let (lo, hi) = self.rules.mass_scale_range;
+        match e.kind {
+            EffectKind::MassScale => (lo..=hi).contains(&e.params[0]),
+            EffectKind::CoulombFriction => e.params[0] >= 0.0 && e.params[2].is_nan_or_nonneg(),
+            EffectKind::StribeckFriction => e.params[0] >= 0.0 && e.params[1] > e.params[0],
+            EffectKind::ViscousDamping | EffectKind::Armature | EffectKind::SoftClose | EffectKind::Spring => e.params[0] >= 0.0,
+            _ => true,
+        }
+    }
+
+    /// Forward selection with replacement inside a family, then backward pruning.
+    fn select(&self) -> Vec<usize> {
+        let mut chosen: Vec<usize> = Vec::new();
+        let mut current = self.evaluate(&chosen);
+        for _ in 0..4 * self.rows.len() + 8 {
+            let mut best: Option<(usize, Verdict, Evaluation)> = None;
+            for c in 0..self.candidates.len() {
+                if chosen.contains(&c) {
+                    continue;
+                }
+                let trial = self.with(&chosen, c);
+                let e = self.evaluate(&trial);
+                let v = self.verdict(&current, &e, &self.rows_of(c), c);
+                // Ties (look-alike kinds) go to the earlier candidate.
+                if self.passes(&v) && best.as_ref().is_none_or(|(_, bv, _)| v.gain > bv.gain * 1.001 + 1e-12) {
+                    best = Some((c, v, e));
+                }
+            }
+            let Some((c, _, e)) = best else { break };
+            chosen = self.with(&chosen, c);
+            current = e;
+        }
+        loop {
+            let mut dropped = false;
+            for idx in 0..chosen.len() {
+                let rest: Vec<usize> = chosen.iter().copied().enumerate().filter(|&(k, _)| k != idx).map(|(_, c)| c).collect();
+                let e = self.evaluate(&rest);
+                let v = self.verdict(&e, &current, &self.rows_of(chosen[idx]), chosen[idx]);
+                if !self.passes(&v) {
+                    chosen = rest;
+                    current = e;
+                    dropped = true;
+                    break;
+                }
+            }
+            if !dropped {
+                break;
+            }
+        }
+        chosen.sort_unstable();
+        chosen
+    }
+
+    /// The effect of candidate c with parameters from `theta` (effort-mode layout).
+    fn effect_of(&self, c: usize, theta: &BTreeMap<usize, f64>) -> Effect {
+        let cand = &self.candidates[c];
+        let t: Vec<f64> = cand.columns.iter().map(|col| theta.get(col).copied().unwrap_or(0.0)).collect();
+        let params = match cand.kind {
+            EffectKind::CoulombFriction if cand.asymmetric => vec![t[0], cand.hyper[0], t[1]],
+            EffectKind::CoulombFriction => vec![t[0], cand.hyper[0], f64::NAN],
+            EffectKind::StribeckFriction => vec![t[0], t[0] + t[1], cand.hyper[0]],
+            EffectKind::Spring => vec![t[0], if t[0].abs() > 1e-12 { t[1] / t[0] } else { 0.0 }],
+            EffectKind::GravityTilt => vec![t[0].hypot(t[1]), t[1].atan2(t[0])],
+            EffectKind::MassScale => vec![1.0 + t[0]],
+            EffectKind::SoftClose => vec![t[0], cand.hyper[0]],
+            _ => t,
+        };
+        Effect { kind: cand.kind, params, blocks_upward: false }
+    }
+
+    /// Identification: the chosen terms per joint, with jackknife σ, confidence, sizes, the
+    /// held-out error before and after, and what was considered and not reported.
+    #[must_use]
+    pub fn identify(&self) -> Vec<JointFinding> {
+        let chosen = self.select();
+        let k = self.rules.folds.max(2);
+        let nominal = self.evaluate(&[]);
+        let fitted = self.evaluate(&chosen);
+        let mut findings: Vec<JointFinding> = self
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(r, info)| {
+                let count = self.grams[r].folds.iter().map(|f| f.3).sum::<usize>().max(1) as f64;
+                let to_rms = |sse: f64| (sse / count / self.weights[r]).sqrt();
+                JointFinding {
+                    joint: info.joint,
+                    effects: Vec::new(),
+                    param_std: Vec::new(),
+                    confidence: Vec::new(),
+                    effect_rms: Vec::new(),
+                    cv_rms_before: to_rms(nominal.row_sse(r)),
+                    cv_rms_after: to_rms(fitted.row_sse(r)),
+                    effort_rms: info.effort_rms,
+                    residual_before: info.residual.clone(),
+                    residual_after: self.residual_after(r, &chosen, &fitted.theta),
+                    rejected: Vec::new(),
+                }
+            })
+            .collect();
+        for &c in &chosen {
+            let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
+            let without = self.evaluate(&rest);
+            let v = self.verdict(&without, &fitted, &self.rows_of(c), c);
+            let effect = self.effect_of(c, &fitted.theta);
+            let jack: Vec<Effect> = fitted.theta_without.iter().map(|t| self.effect_of(c, t)).collect();
+            let std: Vec<f64> = (0..effect.params.len())
+                .map(|p| {
+                    let vals: Vec<f64> = jack.iter().map(|e| e.params[p]).filter(|x| x.is_finite()).collect();
+                    let mean = vals.iter().sum::<f64>() / vals.len().max(1) as f64;
+                    ((k as f64 - 1.0) / k as f64 * vals.iter().map(|x| (x - mean).powi(2)).sum::<f64>()).sqrt()
+                })
+                .collect();
+            let f = &mut findings[self.candidates[c].row];
+            f.confidence.push((v.fold_share * (1.0 - (-v.gain / 0.03).exp())).clamp(0.0, 1.0));
+            f.effect_rms.push(self.term_rms(c, &fitted.theta));
+            f.effects.push(effect);
+            f.param_std.push(std);
+        }
+        self.explain_rejections(&chosen, &fitted, &mut findings);
+        findings
+    }
+
+    fn residual_after(&self, r: usize, chosen: &[usize], theta: &BTreeMap<usize, f64>) -> Vec<f64> {
+        let cols: Vec<usize> = self.columns_of(chosen).into_iter().filter(|c| self.columns[*c].rows.contains_key(&r)).collect();
+        self.rows[r]
+            .residual
+            .iter()
+            .enumerate()
+            .map(|(i, res)| res - cols.iter().map(|c| theta[c] * self.columns[*c].rows[&r][i]).filter(|x| x.is_finite()).sum::<f64>())
+            .collect()
+    }
+
+    /// For every kind not chosen on a joint, its best variant added to the final model, and why
+    /// it was not reported.
+    fn explain_rejections(&self, chosen: &[usize], fitted: &Evaluation, findings: &mut [JointFinding]) {
+        let mut best: BTreeMap<(usize, EffectKind), (Verdict, usize)> = BTreeMap::new();
+        for c in 0..self.candidates.len() {
+            let cand = &self.candidates[c];
+            if chosen.iter().any(|&x| self.candidates[x].row == cand.row && self.candidates[x].kind == cand.kind) {
+                continue;
+            }
+            let e = self.evaluate(&self.with(chosen, c));
+            let v = self.verdict(fitted, &e, &self.rows_of(c), c);
+            let entry = best.entry((cand.row, cand.kind)).or_insert((v, c));
+            if v.gain > entry.0.gain {
+                *entry = (v, c);
+            }
+        }
+        for ((row, kind), (v, _)) in best {
+            let why = if !v.plausible {
+                "its fitted parameters are not physical (a negative level, or a part far lighter or heavier than modelled)".to_owned()
+            } else if v.effort_share < self.rules.min_effort_share {
+                format!("{:.1} % of the joint's own effort — too small to matter", 100.0 * v.effort_share)
+            } else if v.gain < self.rules.min_cv_gain {
+                format!("held-out error {:+.1} % — not better on data it was not fitted to", -100.0 * v.gain)
+            } else {
+                format!("better in only {:.0} % of the held-out blocks", 100.0 * v.fold_share)
+            };
+            findings[row].rejected.push(format!("{}: {why}", kind.name()));
+        }
+    }
+}

@@ -1,0 +1,261 @@
+//! The effort-space way through [`super::analyze`]: identification on the whole recording and on
+//! its first part ([`super::effort`]), replays of the model as written and as fitted through the
+//! whole tree ([`super::chain`]), and the report's pieces per joint.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use glam::DVec3;
+
+use super::chain::{ChainInput, replay};
+use super::effects::{Effect, EffectKind, JointPhysics};
+use super::effort::{EffortProblem, JointFinding, SelectionRules, Signals, signals};
+use super::locate::{Span, mismatch_spans, rmse_over};
+use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
+use super::{GapConfig, GapError, GapModel, JointOutcome, Recording, effect_report, rmse_mask};
+use crate::dynamics::MultiBody;
+
+/// Samples within this share of the travel (or this many noise σ) of a modelled stop are in
+/// contact with it: the stop's force is not in inverse dynamics, so they are left out.
+const CONTACT_SHARE: f64 = 0.01;
+
+/// Per identified joint: samples in contact with a modelled stop (widened by the smoothing
+/// window, since the smoothed acceleration smears an impact over it).
+fn contact_masks(model: &GapModel, sig: &Signals, rows: &[usize], half_width_s: f64) -> Vec<Vec<bool>> {
+    let dofs = model.dofs();
+    let n = sig.time_s.len();
+    rows.iter()
+        .map(|&j| {
+            let joint = &model.joints[j];
+            let d = dofs.iter().position(|&x| x == j).unwrap_or(0);
+            let qs: Vec<f64> = sig.q[d].iter().map(|s| s[0]).filter(|q| q.is_finite()).collect();
+            let (lo, hi) = qs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
+            let band = CONTACT_SHARE * (hi - lo).max(1e-6);
+            let touching: Vec<bool> = (0..n)
+                .map(|i| {
+                    let q = sig.q[d][i][0];
+                    joint.lower.is_some_and(|l| q <= l + band) || joint.upper.is_some_and(|u| q >= u - band)
+                })
+                .collect();
+            let touch_times: Vec<f64> = (0..n).filter(|&i| touching[i]).map(|i| sig.time_s[i]).collect();
+            (0..n)
+                .map(|i| {
+                    let t = sig.time_s[i];
+                    let k = touch_times.partition_point(|&x| x < t - half_width_s);
+                    touch_times.get(k).is_some_and(|&x| x <= t + half_width_s)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The physics of every dof under `effects` (per model joint), and the tree with heavier parts.
+fn fitted_physics(model: &GapModel, tree: &MultiBody, body_of_link: &[Option<usize>], effects: &BTreeMap<usize, Vec<Effect>>) -> (Vec<JointPhysics>, MultiBody) {
+    let mut scaled = tree.clone();
+    let physics = model
+        .dofs()
+        .into_iter()
+        .map(|j| {
+            let list = effects.get(&j).map_or(&[][..], Vec::as_slice);
+            let mut p = JointPhysics::with_effects(&model.joints[j], list);
+            // The tree carries a heavier part (inertia and weight); the joint's own scale is not
+            // applied twice.
+            if p.mass_scale != 1.0 {
+                if let Some(b) = body_of_link[model.joints[j].child] {
+                    for part in moving_part(tree, b) {
+                        scaled = scaled.with_body_scaled(part, p.mass_scale);
+                    }
+                }
+                p.mass_scale = 1.0;
+            }
+            p
+        })
+        .collect();
+    (physics, scaled)
+}
+
+fn moving_part(tree: &MultiBody, body: usize) -> Vec<usize> {
+    let mut out = vec![body];
+    for (i, b) in tree.bodies().iter().enumerate() {
+        if b.dof.is_none() && b.parent.is_some_and(|p| out.contains(&p)) {
+            out.push(i);
+        }
+    }
+    out
+}
+
+fn effects_by_joint(findings: &[JointFinding]) -> BTreeMap<usize, Vec<Effect>> {
+    findings.iter().map(|f| (f.joint, f.effects.clone())).collect()
+}
+
+/// Effort-space analysis of `rows` (model joint indices); one outcome per row.
+pub(super) fn analyze_effort_space(
+    model: &GapModel,
+    rec: &Recording,
+    cfg: &GapConfig,
+    observed: &BTreeMap<usize, Vec<f64>>,
+    rows: &[usize],
+    gravity: DVec3,
+    t_split: f64,
+) -> Result<Vec<JointOutcome>, GapError> {
+    let rules = SelectionRules::default();
+    let dofs = model.dofs();
+    let n = rec.time_s.len();
+    let positions: Vec<Vec<f64>> = dofs.iter().map(|j| observed.get(j).cloned().unwrap_or_else(|| vec![f64::NAN; n])).collect();
+    let efforts: Vec<Option<Vec<f64>>> = dofs.iter().map(|&j| rec.joint_effort.get(&model.joints[j].name).cloned()).collect();
+    let half_width_s = super::effort::smoothing_half_width(&rec.time_s, &positions, rules.smoothing_half_width_s);
+    let sig = signals(&rec.time_s, &positions, &efforts, half_width_s);
+    let excluded = contact_masks(model, &sig, rows, half_width_s);
+    let everything = vec![true; n];
+    let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
+    let Some(problem) = EffortProblem::new(model, &sig, gravity, rows, &excluded, &everything, rules.clone()) else {
+        return Ok(Vec::new());
+    };
+    let findings = problem.identify();
+    let train_findings = EffortProblem::new(model, &sig, gravity, rows, &excluded, &train, rules.clone()).map(|p| p.identify());
+
+    let (tree, body_of_link) = model.multibody()?;
+    let recorded: Vec<Vec<f64>> = dofs.iter().map(|&j| (0..n).map(|i| rec.effort(&model.joints[j].name, i)).collect()).collect();
+    let input = ChainInput { time_s: &rec.time_s, effort: &recorded, gravity };
+    let q0: Vec<f64> = sig.q.iter().map(|s| s[0][0]).map(|v| if v.is_finite() { v } else { 0.0 }).collect();
+    let v0: Vec<f64> = sig.q.iter().map(|s| s[0][1]).map(|v| if v.is_finite() { v } else { 0.0 }).collect();
+    let (nominal_physics, _) = fitted_physics(model, &tree, &body_of_link, &BTreeMap::new());
+    let before = replay(&tree, &nominal_physics, &input, &q0, &v0);
+    let (physics, tree_fitted) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(&findings));
+    let after = replay(&tree_fitted, &physics, &input, &q0, &v0);
+    let held = train_findings.as_ref().map(|f| {
+        let (p, t) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(f));
+        replay(&t, &p, &input, &q0, &v0)
+    });
+
+    let mut out = Vec::with_capacity(rows.len());
+    for f in &findings {
+        let d = dofs.iter().position(|&x| x == f.joint).unwrap_or(0);
+        let y = &positions[d];
+        let replays = Replays { before: &before[d], after: &after[d], held: held.as_ref().map(|h| h[d].as_slice()) };
+        out.push(joint_outcome(half_width_s, model, rec, cfg, &rules, f, y, &replays, gravity, t_split));
+    }
+    Ok(out)
+}
+
+struct Replays<'a> {
+    before: &'a [f64],
+    after: &'a [f64],
+    held: Option<&'a [f64]>,
+}
+
+fn joint_outcome(
+    half_width_s: f64,
+    model: &GapModel,
+    rec: &Recording,
+    cfg: &GapConfig,
+    rules: &SelectionRules,
+    f: &JointFinding,
+    y: &[f64],
+    replays: &Replays<'_>,
+    gravity: DVec3,
+    t_split: f64,
+) -> JointOutcome {
+    let joint = &model.joints[f.joint];
+    let unit = if joint.kind.is_rotational() { "rad" } else { "m" };
+    let force = if joint.kind.is_rotational() { "N·m" } else { "N" };
+    let zeros = vec![0.0; model.joints.len()];
+    let terms = model.joint_terms(f.joint, &zeros, gravity);
+    let mut effects: Vec<EffectReport> = f
+        .effects
+        .iter()
+        .zip(&f.param_std)
+        .zip(&f.confidence)
+        .zip(&f.effect_rms)
+        .map(|(((e, sd), c), size)| {
+            let mut r = effect_report(joint, &terms, gravity, e, sd, *c);
+            let _ = write!(r.description, " — {size:.4} {force} RMS over the motion, {:.0} % of the joint's own effort", 100.0 * size / f.effort_rms.max(1e-12));
+            r
+        })
+        .collect();
+    let floor = f.cv_rms_after.max(1e-12);
+    let spans = mismatch_spans(&f.residual_before, floor, cfg.min_mismatch_samples);
+    let position_residual: Vec<f64> = y.iter().zip(replays.before).map(|(a, b)| a - b).collect();
+    let mismatches: Vec<Mismatch> =
+        spans.iter().map(|s| effort_mismatch(rec, joint, y, &f.residual_before, &position_residual, *s, force)).collect();
+    if f.cv_rms_after > rules.unknown_share * f.effort_rms {
+        let left = mismatch_spans(&f.residual_after, floor.min(rules.unknown_share * f.effort_rms), cfg.min_mismatch_samples);
+        let at: Vec<String> = left.iter().take(4).map(|s| format!("{:.2}–{:.2} s", rec.time_s[s.start], rec.time_s[s.end])).collect();
+        let share = f.cv_rms_after / f.effort_rms.max(1e-12);
+        effects.push(EffectReport {
+            joint: joint.name.clone(),
+            kind: EffectKind::Unknown.name().into(),
+            params: BTreeMap::from([("residual_rms".to_owned(), f.cv_rms_after)]),
+            uncertainty: BTreeMap::new(),
+            confidence: (share / (2.0 * rules.unknown_share)).clamp(0.0, 1.0),
+            description: format!(
+                "{:.4} {force} RMS of effort ({:.0} % of the joint's own) that no known kind explains{}",
+                f.cv_rms_after,
+                100.0 * share,
+                if at.is_empty() { String::new() } else { format!(", largest at {}", at.join(", ")) }
+            ),
+        });
+    }
+    let (sb, c) = rmse_mask(y, replays.before, |_| true);
+    let (sa, _) = rmse_mask(y, replays.after, |_| true);
+    let cf = c.max(1) as f64;
+    let all = RmsePair { rmse_before: (sb / cf).sqrt(), rmse_after: (sa / cf).sqrt() };
+    let held = replays.held.map_or_else(RmsePair::default, |h| {
+        let keep = |i: usize| rec.time_s[i] >= t_split;
+        let (hb, hc) = rmse_mask(y, replays.before, keep);
+        let (ha, _) = rmse_mask(y, h, keep);
+        let hc = hc.max(1) as f64;
+        RmsePair { rmse_before: (hb / hc).sqrt(), rmse_after: (ha / hc).sqrt() }
+    });
+    let residual_of = |sim: &[f64]| y.iter().zip(sim).map(|(a, b)| a - b).collect::<Vec<f64>>();
+    let series = JointSeries {
+        joint: joint.name.clone(),
+        unit,
+        time_s: rec.time_s.clone(),
+        measured: y.to_vec(),
+        residual_before: residual_of(replays.before),
+        residual_after: residual_of(replays.after),
+        simulated_before: replays.before.to_vec(),
+        simulated_after: replays.after.to_vec(),
+        noise_sigma: super::locate::noise_sigma(&rec.time_s, y),
+    };
+    let analysis = report::JointAnalysis {
+        mode: "effort".into(),
+        why: format!(
+            "effort recorded and every joint's position recorded: residual effort from inverse dynamics of the whole tree \
+             (positions and efforts smoothed alike by a local cubic over ±{:.0} ms)",
+            1000.0 * half_width_s
+        ),
+        effort_rms: Some(f.effort_rms),
+        effort_residual: Some(RmsePair { rmse_before: f.cv_rms_before, rmse_after: f.cv_rms_after }),
+        rejected: f.rejected.clone(),
+    };
+    JointOutcome { mismatches, effects, all, held, sq: (sb, sa, c), series, analysis }
+}
+
+fn effort_mismatch(rec: &Recording, joint: &super::model::GapJoint, y: &[f64], effort_residual: &[f64], position_residual: &[f64], span: Span, force: &str) -> Mismatch {
+    let idx: Vec<usize> = (span.start..=span.end).filter(|&i| y[i].is_finite()).collect();
+    let (lo, hi) = idx.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| (a.min(y[i]), b.max(y[i])));
+    let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 0.0) };
+    let mean: f64 = {
+        let vals: Vec<f64> = effort_residual[span.start..=span.end].iter().copied().filter(|v| v.is_finite()).collect();
+        vals.iter().sum::<f64>() / vals.len().max(1) as f64
+    };
+    let unit = if joint.kind.is_rotational() { "rad" } else { "m" };
+    let direction = match (y.get(span.start), y.get(span.end)) {
+        (Some(a), Some(b)) if b - a > 0.1 * (hi - lo) => "increasing",
+        (Some(a), Some(b)) if a - b > 0.1 * (hi - lo) => "decreasing",
+        _ => "both",
+    };
+    Mismatch {
+        joint: joint.name.clone(),
+        t_start: rec.time_s[span.start],
+        t_end: rec.time_s[span.end],
+        rmse: rmse_over(position_residual, span),
+        description: format!(
+            "the recorded effort differs from what the model needs by {:.4} {force} RMS (mean {mean:+.4}) (q {lo:.3}–{hi:.3} {unit})",
+            rmse_over(effort_residual, span)
+        ),
+        conditions: Conditions { position_min: lo, position_max: hi, direction: direction.into(), near_stop: None },
+    }
+}
