@@ -188,6 +188,50 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Score the reality-gap analysis on a folder of cases with known answers (as `bench` scores
+    /// objects): each sub-folder holds model.urdf, recording.csv and truth.json
+    /// (`scripts/gap_suite.py`). Prints a per-case table and a summary.
+    ///
+    /// Scoring: per joint, the reported kinds against the truth's (`unknown` is an extra kind,
+    /// and a false positive on joints where the truth has nothing); parameters within 25 % of the
+    /// truth (positions: 25 % of max(|truth|, the joint's measured motion range)); held-out RMSE
+    /// cut ≥ 5× on joints with effects; confidence calibration; truth within ±2σ. A case that fails
+    /// to load or analyse counts as wrong.
+    ///
+    /// CI: the --require-* options make the command exit with status 1 (after printing) when the
+    /// summary is below them; shares are fractions in [0, 1].
+    GapBench {
+        /// Folder of case folders (or one case folder).
+        dir: PathBuf,
+        /// Also write the tables as markdown here.
+        #[arg(long, value_name = "FILE")]
+        markdown: Option<PathBuf>,
+        /// Fail when fewer than this share of cases has exactly the truth's kinds on every joint.
+        #[arg(long, value_name = "F", visible_alias = "min-kinds-exact")]
+        require_kinds_exact: Option<f64>,
+        /// Fail when fewer than this share of cases has every effect joint located.
+        #[arg(long, value_name = "F")]
+        require_located: Option<f64>,
+        /// Fail when fewer than this share of truth parameters is within 25 %.
+        #[arg(long, value_name = "F")]
+        require_params: Option<f64>,
+        /// Fail when fewer than this share of cases with effects has a held-out cut ≥ 5× on every
+        /// effect joint.
+        #[arg(long, value_name = "F")]
+        require_cut: Option<f64>,
+        /// Fail when fewer than this share of compared parameters has the truth within ±2σ.
+        #[arg(long, value_name = "F")]
+        require_coverage: Option<f64>,
+        /// Fail when any case without concealed effects reports an effect.
+        #[arg(long)]
+        require_null_clean: bool,
+        /// Fail when there are more false positives than this over all cases.
+        #[arg(long, value_name = "N")]
+        max_false_positives: Option<usize>,
+        /// Fail when any case cannot be loaded or analysed.
+        #[arg(long)]
+        require_no_errors: bool,
+    },
     /// Multibody dynamics of a URDF at given states (checks against other libraries): inverse
     /// dynamics, mass matrix, bias efforts and forward dynamics, as JSON.
     Dynamics {
@@ -324,6 +368,30 @@ fn main() -> Result<()> {
         Command::Mjcf { scene, effects, out } => mjcf_cmd(&scene, effects.as_deref(), &out),
         Command::Bench { dir, markdown, seed } => bench_cmd(&dir, markdown.as_deref(), seed, &cfg, cli.json),
         Command::Gap { model, recording, out } => gap_cmd(model.as_deref(), &recording, &out, cli.json),
+        Command::GapBench {
+            dir,
+            markdown,
+            require_kinds_exact,
+            require_located,
+            require_params,
+            require_cut,
+            require_coverage,
+            require_null_clean,
+            max_false_positives,
+            require_no_errors,
+        } => {
+            let requirements = partscene::gap::bench::Requirements {
+                kinds_exact: require_kinds_exact,
+                located: require_located,
+                params: require_params,
+                cut: require_cut,
+                coverage: require_coverage,
+                null_clean: require_null_clean,
+                max_false_positives,
+                no_errors: require_no_errors,
+            };
+            gap_bench_cmd(&dir, markdown.as_deref(), &requirements, cli.json)
+        }
         Command::Dynamics { model, states, out } => dynamics_cmd(&model, &states, &out),
     }
 }
@@ -612,6 +680,44 @@ fn gap_cmd(model: Option<&Path>, recording: &Path, out: &Path, json: bool) -> Re
         }
         println!("rmse {:.5} -> {:.5}", report.fit.rmse_before, report.fit.rmse_after);
     }
+    Ok(())
+}
+
+fn gap_bench_cmd(dir: &Path, markdown: Option<&Path>, requirements: &partscene::gap::bench::Requirements, json: bool) -> Result<()> {
+    use partscene::gap::{GapConfig, bench};
+    let shares = [
+        ("--require-kinds-exact", requirements.kinds_exact),
+        ("--require-located", requirements.located),
+        ("--require-params", requirements.params),
+        ("--require-cut", requirements.cut),
+        ("--require-coverage", requirements.coverage),
+    ];
+    for (flag, v) in shares {
+        if let Some(v) = v {
+            anyhow::ensure!((0.0..=1.0).contains(&v), "{flag} must be a fraction in [0, 1], got {v}");
+        }
+    }
+    let bars = Bars::new(!json, "cases");
+    let progress = |done: usize, total: usize, name: &str| bars.update(name, done, total);
+    let report = bench::bench_dir(dir, &GapConfig::default(), &progress)?;
+    bars.finish();
+    if let Some(path) = markdown {
+        atomic_write(path, report.markdown().as_bytes())?;
+    }
+    let unmet = requirements.unmet(&report.summary);
+    if json {
+        let mut value = serde_json::to_value(&report)?;
+        if let Some(object) = value.as_object_mut() {
+            object.insert("unmet_requirements".into(), serde_json::json!(unmet));
+        }
+        println!("{}", serde_json::to_string_pretty(&value)?);
+    } else {
+        print!("{report}");
+        if let Some(path) = markdown {
+            println!("wrote {}", path.display());
+        }
+    }
+    anyhow::ensure!(unmet.is_empty(), "gap-bench below the required thresholds: {}", unmet.join("; "));
     Ok(())
 }
 

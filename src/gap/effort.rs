@@ -38,6 +38,9 @@ pub struct SelectionRules {
     /// Residual RMS (share of the joint's own RMS effort) left after the best model above which
     /// `unknown` is reported.
     pub unknown_share: f64,
+    /// Smallest change of a part's weight worth reporting (documented masses are rarely better
+    /// than this): a 4 % heavier part is the model's accuracy, not missing physics.
+    pub min_mass_change: f64,
     /// Plausible range of `mass_scale`: a documented part that weighs less than the lower or more
     /// than the upper bound times its model is a wrong model, not a missing effect; such a fit is
     /// not reported as a heavier part.
@@ -57,6 +60,7 @@ impl Default for SelectionRules {
             unknown_share: 0.2,
             smoothing_half_width_s: 0.1,
             mass_scale_range: (0.5, 3.0),
+            min_mass_change: 0.1,
         }
     }
 }
@@ -120,28 +124,41 @@ pub fn smoothing_half_width(time_s: &[f64], positions: &[Vec<f64>], first_pass_s
     (half_samples * dt).clamp(3.0 * dt, MAX_HALF_WIDTH_S.max(3.0 * dt))
 }
 
-/// Smooths every dof's position and every recorded effort with the same local cubic. Efforts
-/// hold until the next sample (spec §2), so an effort sample counts at the middle of its hold.
+/// Half-width of the second, narrow stage that differentiates the smoothed positions, in samples.
+const DIFFERENTIATOR_SAMPLES: f64 = 3.0;
+
+/// Smooths every dof's position and every recorded effort with the same filter, then
+/// differentiates the smoothed positions. Two stages keep the two sides of the equation of motion
+/// consistent: a local cubic's own derivative coefficients are not the derivative of its smoothed
+/// values, so the smoothed effort would not match the smoothed acceleration where the motion has
+/// kinks (a push starting). Stage one smooths values (positions and efforts alike, a linear
+/// filter K); stage two, a narrow local cubic, takes the derivatives of K∗q and is applied to K∗τ
+/// too. Efforts hold until the next sample (spec §2), so an effort sample counts at the middle
+/// of its hold.
 #[must_use]
 pub fn signals(time_s: &[f64], positions: &[Vec<f64>], efforts: &[Option<Vec<f64>>], half_width_s: f64) -> Signals {
     let n = time_s.len();
-    let q: Vec<Vec<[f64; 3]>> = positions.iter().map(|y| local_cubic(time_s, y, half_width_s)).collect();
+    let dt = if n > 1 { (time_s[n - 1] - time_s[0]) / (n - 1) as f64 } else { 0.01 };
+    let narrow = DIFFERENTIATOR_SAMPLES * dt;
+    let values = |t: &[f64], y: &[f64]| -> Vec<f64> { local_cubic(t, y, half_width_s).into_iter().map(|x| x[0]).collect() };
+    let q: Vec<Vec<[f64; 3]>> = positions.iter().map(|y| local_cubic(time_s, &values(time_s, y), narrow)).collect();
     let mid: Vec<f64> = (0..n).map(|i| if i + 1 < n { 0.5 * (time_s[i] + time_s[i + 1]) } else { time_s[i] }).collect();
     let effort: Vec<Option<Vec<f64>>> = efforts
         .iter()
         .map(|e| {
             e.as_ref().map(|e| {
-                let at_mid = local_cubic(&mid, e, half_width_s);
+                let at_mid = local_cubic(&mid, &values(&mid, e), narrow);
                 // Evaluate at the sample times: the hold's middle is half a step later.
                 (0..n).map(|i| at_mid[i][0] - at_mid[i][1] * (mid[i] - time_s[i])).collect()
             })
         })
         .collect();
     let (t0, t1) = (time_s.first().copied().unwrap_or(0.0), time_s.last().copied().unwrap_or(0.0));
+    let edge = half_width_s + narrow;
     let usable = (0..n)
         .map(|i| {
-            time_s[i] - t0 >= half_width_s
-                && t1 - time_s[i] >= half_width_s
+            time_s[i] - t0 >= edge
+                && t1 - time_s[i] >= edge
                 && q.iter().all(|d| d[i].iter().all(|v| v.is_finite()))
                 && effort.iter().flatten().all(|e| e[i].is_finite())
         })
@@ -350,10 +367,16 @@ impl<'a> EffortProblem<'a> {
             used,
         };
         problem.fold_of = problem.assign_folds(sig);
-        problem.build_candidates(sig, &tree, &me, &part_of);
+        problem.build_candidates(sig, &me, &part_of);
         problem.weights = problem.rows.iter().map(|r| 1.0 / robust_scale(&r.residual).max(1e-9).powi(2)).collect();
         problem.build_grams();
         Some(problem)
+    }
+
+    /// The identified joints, with their residual effort under the model as written.
+    #[must_use]
+    pub fn rows(&self) -> &[RowInfo] {
+        &self.rows
     }
 
     /// Contiguous blocks of equal duration over the used samples.
@@ -367,8 +390,23 @@ impl<'a> EffortProblem<'a> {
     }
 }
 
+/// Whether joint j has a movable joint above or below it (an arm, a pendulum chain) rather than
+/// hanging alone off a fixed body (a door, a drawer).
+#[must_use]
+pub fn in_serial_chain(model: &GapModel, j: usize) -> bool {
+    let movable_below = model.subtree(j).iter().skip(1).any(|&l| model.parent_joint[l].is_some_and(|k| model.joints[k].kind != DofKind::Fixed));
+    let mut link = model.joints[j].parent;
+    let mut movable_above = false;
+    while let Some(k) = model.parent_joint[link] {
+        movable_above |= model.joints[k].kind != DofKind::Fixed;
+        link = model.joints[k].parent;
+    }
+    movable_below || movable_above
+}
+
 /// 1.4826 · MAD of the finite values.
-fn robust_scale(v: &[f64]) -> f64 {
+#[must_use]
+pub fn robust_scale(v: &[f64]) -> f64 {
     let mut x: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
     if x.is_empty() {
         return 0.0;
@@ -399,12 +437,12 @@ impl EffortProblem<'_> {
     }
 
     /// Every candidate term of every row, with its regressor columns.
-    fn build_candidates(&mut self, sig: &Signals, tree: &MultiBody, me: &ModelEfforts, part_of: &[Vec<usize>]) {
+    fn build_candidates(&mut self, sig: &Signals, me: &ModelEfforts, part_of: &[Vec<usize>]) {
         let n = sig.time_s.len();
-        let chain = self.rows.len() > 1;
         for r in 0..self.rows.len() {
             let (j, d) = (self.rows[r].joint, self.rows[r].dof);
             let joint = &self.model.joints[j];
+            let chain = in_serial_chain(self.model, j);
             let ok = self.used[r].clone();
             let col = |f: &dyn Fn([f64; 3]) -> f64| -> Vec<f64> { (0..n).map(|i| if ok[i] { f(sig.q[d][i]) } else { f64::NAN }).collect() };
             let v_rms = rms((0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][1])).max(1e-6);
@@ -438,8 +476,9 @@ impl EffortProblem<'_> {
                 self.candidates.extend(mass);
                 self.push(r, EffectKind::Armature, Family::Inertia, Vec::new(), false, vec![col(&|x| x[2])]);
             }
-            let single_dof = tree.dof_count() == 1;
-            if joint.kind.is_rotational() && single_dof {
+            // A tilted axis is a property of a joint alone on its body; in a chain the sin law of
+            // its own angle does not hold.
+            if joint.kind.is_rotational() && !chain {
                 self.push(r, EffectKind::GravityTilt, Family::Tilt, Vec::new(), false, vec![col(&|x| x[0].sin()), col(&|x| -x[0].cos())]);
             }
             if joint.kind != DofKind::Continuous && hi > lo {
@@ -624,6 +663,9 @@ impl EffortProblem<'_> {
     }
 }
 
+/// Fewest held-out samples for a fold to count in the fold share.
+const MIN_FOLD_SAMPLES: usize = 10;
+
 /// How a candidate fared against the current model.
 #[derive(Debug, Clone, Copy)]
 struct Verdict {
@@ -662,13 +704,18 @@ impl EffortProblem<'_> {
         let k = self.rules.folds.max(2);
         let sum = |e: &Evaluation| rows.iter().map(|&r| e.row_sse(r)).sum::<f64>();
         let (b, a) = (sum(before), sum(after));
-        let better = (0..k)
-            .filter(|&f| rows.iter().map(|&r| after.fold_sse[r][f]).sum::<f64>() < rows.iter().map(|&r| before.fold_sse[r][f]).sum::<f64>())
+        // Folds where these rows have held-out samples (a drawer resting on its stop for a whole
+        // block says nothing about it).
+        let informative: Vec<usize> =
+            (0..k).filter(|&f| rows.iter().map(|&r| self.grams[r].folds[f].3).sum::<usize>() >= MIN_FOLD_SAMPLES).collect();
+        let better = informative
+            .iter()
+            .filter(|&&f| rows.iter().map(|&r| after.fold_sse[r][f]).sum::<f64>() < rows.iter().map(|&r| before.fold_sse[r][f]).sum::<f64>())
             .count();
         let row = self.candidates[c].row;
         Verdict {
             gain: if b > 0.0 { (b - a) / b } else { 0.0 },
-            fold_share: better as f64 / k as f64,
+            fold_share: better as f64 / informative.len().max(1) as f64,
             effort_share: self.term_rms(c, &after.theta) / self.rows[row].effort_rms.max(1e-12),
             plausible: self.plausible(c, &after.theta),
         }
@@ -687,7 +734,7 @@ impl EffortProblem<'_> {
         let e = self.effect_of(c, theta);
         let (lo, hi) = self.rules.mass_scale_range;
         match e.kind {
-            EffectKind::MassScale => (lo..=hi).contains(&e.params[0]),
+            EffectKind::MassScale => (lo..=hi).contains(&e.params[0]) && (e.params[0] - 1.0).abs() >= self.rules.min_mass_change,
             EffectKind::CoulombFriction => e.params[0] >= 0.0 && e.params[2].is_nan_or_nonneg(),
             EffectKind::StribeckFriction => e.params[0] >= 0.0 && e.params[1] > e.params[0],
             EffectKind::ViscousDamping | EffectKind::Armature | EffectKind::SoftClose | EffectKind::Spring => e.params[0] >= 0.0,
@@ -836,7 +883,7 @@ impl EffortProblem<'_> {
         }
         for ((row, kind), (v, _)) in best {
             let why = if !v.plausible {
-                "its fitted parameters are not physical (a negative level, or a part far lighter or heavier than modelled)".to_owned()
+                "its fitted parameters are not physical or not material (a negative level; a part within 10 % of, or far from, its modelled weight)".to_owned()
             } else if v.effort_share < self.rules.min_effort_share {
                 format!("{:.1} % of the joint's own effort — too small to matter", 100.0 * v.effort_share)
             } else if v.gain < self.rules.min_cv_gain {

@@ -9,38 +9,40 @@ use glam::DVec3;
 
 use super::chain::{ChainInput, replay};
 use super::effects::{Effect, EffectKind, JointPhysics};
-use super::effort::{EffortProblem, JointFinding, SelectionRules, Signals, signals};
+use super::effort::{EffortProblem, JointFinding, SelectionRules, signals};
 use super::locate::{Span, mismatch_spans, rmse_over};
+use super::stops::{FoundStop, StopRules, find_stops};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
-use super::{GapConfig, GapError, GapModel, JointOutcome, Recording, effect_report, rmse_mask};
+use super::effort::in_serial_chain;
+use super::{GapConfig, GapError, GapModel, Given, JointOutcome, Recording, effect_report, rmse_mask};
 use crate::dynamics::MultiBody;
 
 /// Samples within this share of the travel (or this many noise σ) of a modelled stop are in
 /// contact with it: the stop's force is not in inverse dynamics, so they are left out.
 const CONTACT_SHARE: f64 = 0.01;
 
-/// Per identified joint: samples in contact with a modelled stop (widened by the smoothing
-/// window, since the smoothed acceleration smears an impact over it).
-fn contact_masks(model: &GapModel, sig: &Signals, rows: &[usize], half_width_s: f64) -> Vec<Vec<bool>> {
+/// Least share of the samples free of contact with modelled stops for effort space.
+const MIN_FREE_SHARE: f64 = 0.5;
+
+/// Per identified joint: samples in contact with a modelled stop, from the measured positions
+/// (within [`CONTACT_SHARE`] of the travel or four noise σ of the limit), widened by the
+/// smoothing window, since the smoothed acceleration smears an impact over it.
+fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows: &[usize], half_width_s: f64) -> Vec<Vec<bool>> {
     let dofs = model.dofs();
-    let n = sig.time_s.len();
+    let n = time_s.len();
     rows.iter()
         .map(|&j| {
             let joint = &model.joints[j];
-            let d = dofs.iter().position(|&x| x == j).unwrap_or(0);
-            let qs: Vec<f64> = sig.q[d].iter().map(|s| s[0]).filter(|q| q.is_finite()).collect();
-            let (lo, hi) = qs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
-            let band = CONTACT_SHARE * (hi - lo).max(1e-6);
-            let touching: Vec<bool> = (0..n)
-                .map(|i| {
-                    let q = sig.q[d][i][0];
-                    joint.lower.is_some_and(|l| q <= l + band) || joint.upper.is_some_and(|u| q >= u - band)
-                })
+            let y = &positions[dofs.iter().position(|&x| x == j).unwrap_or(0)];
+            let (lo, hi) = y.iter().filter(|q| q.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
+            let band = (CONTACT_SHARE * (hi - lo).max(1e-6)).max(4.0 * super::locate::noise_sigma(time_s, y));
+            let touch_times: Vec<f64> = (0..n)
+                .filter(|&i| y[i].is_finite() && (joint.lower.is_some_and(|l| y[i] <= l + band) || joint.upper.is_some_and(|u| y[i] >= u - band)))
+                .map(|i| time_s[i])
                 .collect();
-            let touch_times: Vec<f64> = (0..n).filter(|&i| touching[i]).map(|i| sig.time_s[i]).collect();
             (0..n)
                 .map(|i| {
-                    let t = sig.time_s[i];
+                    let t = time_s[i];
                     let k = touch_times.partition_point(|&x| x < t - half_width_s);
                     touch_times.get(k).is_some_and(|&x| x <= t + half_width_s)
                 })
@@ -84,6 +86,42 @@ fn moving_part(tree: &MultiBody, body: usize) -> Vec<usize> {
     out
 }
 
+/// Unmodelled stops of every identified joint (same order as `rows_info`).
+fn unmodelled_stops(model: &GapModel, rec: &Recording, positions: &[Vec<f64>], rows_info: &[super::effort::RowInfo]) -> Vec<Vec<FoundStop>> {
+    let rules = StopRules::default();
+    rows_info
+        .iter()
+        .map(|info| {
+            let joint = &model.joints[info.joint];
+            if joint.kind == super::model::DofKind::Continuous {
+                return Vec::new();
+            }
+            let y = &positions[info.dof];
+            let noise = super::locate::noise_sigma(&rec.time_s, y);
+            find_stops(&rec.time_s, y, &info.residual, info.effort_rms, noise, (joint.lower, joint.upper), &rules)
+        })
+        .collect()
+}
+
+/// Marks samples within `half_width_s` of a contact sample.
+fn widen_into(mask: &mut [bool], contact: &[bool], time_s: &[f64], half_width_s: f64) {
+    let times: Vec<f64> = (0..contact.len()).filter(|&i| contact[i]).map(|i| time_s[i]).collect();
+    for (i, m) in mask.iter_mut().enumerate() {
+        let t = time_s[i];
+        let k = times.partition_point(|&x| x < t - half_width_s);
+        if times.get(k).is_some_and(|&x| x <= t + half_width_s) {
+            *m = true;
+        }
+    }
+}
+
+fn add_stop(f: &mut JointFinding, stop: &FoundStop) {
+    f.effects.push(stop.effect.clone());
+    f.param_std.push(vec![f64::NAN; 2]);
+    f.confidence.push(stop.confidence);
+    f.effect_rms.push(stop.push);
+}
+
 fn effects_by_joint(findings: &[JointFinding]) -> BTreeMap<usize, Vec<Effect>> {
     findings.iter().map(|f| (f.joint, f.effects.clone())).collect()
 }
@@ -97,22 +135,56 @@ pub(super) fn analyze_effort_space(
     rows: &[usize],
     gravity: DVec3,
     t_split: f64,
-) -> Result<Vec<JointOutcome>, GapError> {
+) -> Result<(Vec<JointOutcome>, BTreeMap<usize, Given>), GapError> {
     let rules = SelectionRules::default();
     let dofs = model.dofs();
     let n = rec.time_s.len();
     let positions: Vec<Vec<f64>> = dofs.iter().map(|j| observed.get(j).cloned().unwrap_or_else(|| vec![f64::NAN; n])).collect();
     let efforts: Vec<Option<Vec<f64>>> = dofs.iter().map(|&j| rec.joint_effort.get(&model.joints[j].name).cloned()).collect();
     let half_width_s = super::effort::smoothing_half_width(&rec.time_s, &positions, rules.smoothing_half_width_s);
+    // The contact exclusions cover the whole support of the two smoothing stages.
+    let support_s = half_width_s + 4.0 * (rec.time_s[n - 1] - rec.time_s[0]) / (n.max(2) - 1) as f64;
     let sig = signals(&rec.time_s, &positions, &efforts, half_width_s);
-    let excluded = contact_masks(model, &sig, rows, half_width_s);
+    // Joints that spend most of the recording against their stops leave effort space too little
+    // free motion to regress on; position space (simulation through the stops) takes them.
+    let all_excluded = contact_masks(model, &rec.time_s, &positions, rows, support_s);
+    let rows: Vec<usize> = rows
+        .iter()
+        .zip(&all_excluded)
+        .filter(|(_, mask)| mask.iter().filter(|&&x| !x).count() as f64 >= MIN_FREE_SHARE * n as f64)
+        .map(|(j, _)| *j)
+        .collect();
+    if rows.is_empty() {
+        return Ok((Vec::new(), BTreeMap::new()));
+    }
+    let rows = rows.as_slice();
+    let mut excluded = contact_masks(model, &rec.time_s, &positions, rows, support_s);
     let everything = vec![true; n];
     let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
-    let Some(problem) = EffortProblem::new(model, &sig, gravity, rows, &excluded, &everything, rules.clone()) else {
-        return Ok(Vec::new());
+    let Some(first) = EffortProblem::new(model, &sig, gravity, rows, &excluded, &everything, rules.clone()) else {
+        return Ok((Vec::new(), BTreeMap::new()));
     };
-    let findings = problem.identify();
-    let train_findings = EffortProblem::new(model, &sig, gravity, rows, &excluded, &train, rules.clone()).map(|p| p.identify());
+    let stops = unmodelled_stops(model, rec, &positions, first.rows());
+    for (r, found) in stops.iter().enumerate() {
+        for stop in found {
+            widen_into(&mut excluded[r], &stop.contact, &rec.time_s, support_s);
+        }
+    }
+    let problem = if stops.iter().all(Vec::is_empty) {
+        first
+    } else {
+        EffortProblem::new(model, &sig, gravity, rows, &excluded, &everything, rules.clone()).unwrap_or(first)
+    };
+    let mut findings = problem.identify();
+    let mut train_findings = EffortProblem::new(model, &sig, gravity, rows, &excluded, &train, rules.clone()).map(|p| p.identify());
+    for (r, found) in stops.iter().enumerate() {
+        for stop in found {
+            add_stop(&mut findings[r], stop);
+            if let Some(t) = train_findings.as_mut() {
+                add_stop(&mut t[r], stop);
+            }
+        }
+    }
 
     let (tree, body_of_link) = model.multibody()?;
     let recorded: Vec<Vec<f64>> = dofs.iter().map(|&j| (0..n).map(|i| rec.effort(&model.joints[j].name, i)).collect()).collect();
@@ -129,13 +201,30 @@ pub(super) fn analyze_effort_space(
     });
 
     let mut out = Vec::with_capacity(rows.len());
+    let mut given = BTreeMap::new();
     for f in &findings {
         let d = dofs.iter().position(|&x| x == f.joint).unwrap_or(0);
         let y = &positions[d];
         let replays = Replays { before: &before[d], after: &after[d], held: held.as_ref().map(|h| h[d].as_slice()) };
-        out.push(joint_outcome(half_width_s, model, rec, cfg, &rules, f, y, &replays, gravity, t_split));
+        let mut outcome = joint_outcome(half_width_s, model, rec, cfg, &rules, f, y, &replays, gravity, t_split);
+        if in_serial_chain(model, f.joint) {
+            out.push(outcome);
+        } else {
+            // A joint alone on its body: effort space chose the terms, output error refines their
+            // levels and validates them through the joint's exact 1-DoF simulation (stops, sticking).
+            outcome.analysis.why.push_str("; levels refined by output error (multiple shooting) on the measured positions");
+            given.insert(
+                f.joint,
+                Given {
+                    effects: f.effects.clone(),
+                    confidence: f.confidence.clone(),
+                    extra: outcome.effects.into_iter().filter(|e| e.kind == EffectKind::Unknown.name()).collect(),
+                    analysis: outcome.analysis,
+                },
+            );
+        }
     }
-    Ok(out)
+    Ok((out, given))
 }
 
 struct Replays<'a> {

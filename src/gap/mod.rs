@@ -8,6 +8,7 @@
 //! fitted model, `plot` the SVG figures, `generate` recordings with concealed effects (different
 //! physics code: RK4 with event location) for tests and demos.
 
+pub mod bench;
 pub mod chain;
 pub mod effects;
 pub mod effort;
@@ -22,6 +23,7 @@ pub mod recording;
 pub mod report;
 pub mod select;
 pub mod sim;
+pub mod stops;
 pub mod smooth;
 mod effort_mode;
 
@@ -102,8 +104,8 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     let gravity = DVec3::from_array(rec.gravity_mps2);
     let t_split = rec.time_s[0] + (1.0 - cfg.held_out_fraction) * (rec.time_s[n - 1] - rec.time_s[0]);
     let effort_joints = effort_space_joints(model, rec, &observed);
-    let mut outcomes = if effort_joints.is_empty() {
-        Vec::new()
+    let (mut outcomes, given) = if effort_joints.is_empty() {
+        (Vec::new(), std::collections::BTreeMap::new())
     } else {
         analyze_effort_space(model, rec, cfg, &observed, &effort_joints, gravity, t_split)?
     };
@@ -113,11 +115,18 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     let coupling = coupling_efforts(model, rec, &observed, gravity);
     let jobs: Vec<(usize, &Vec<f64>)> = observed.iter().filter(|(j, _)| !done.contains(j)).map(|(j, q)| (*j, q)).collect();
     let why = position_space_reason(model, rec, &observed);
-    outcomes.extend(jobs.par_iter().map(|&(j, y)| {
-        let mut o = analyze_joint(model, rec, cfg, j, y, &filled, coupling.as_ref().map(|c| c[j].as_slice()), gravity, t_split);
-        o.analysis.why.clone_from(&why);
-        o
-    }).collect::<Vec<_>>());
+    outcomes.extend(
+        jobs.par_iter()
+            .map(|&(j, y)| {
+                let mut o =
+                    analyze_joint(model, rec, cfg, j, y, &filled, coupling.as_ref().map(|c| c[j].as_slice()), gravity, t_split, given.get(&j));
+                if !given.contains_key(&j) {
+                    o.analysis.why.clone_from(&why);
+                }
+                o
+            })
+            .collect::<Vec<_>>(),
+    );
     outcomes.sort_by_key(|o| model.joint_index(&o.series.joint));
     Ok(assemble_report(cfg, notes, t_split, outcomes))
 }
@@ -243,6 +252,7 @@ fn analyze_joint(
     coupling: Option<&[f64]>,
     gravity: DVec3,
     t_split: f64,
+    given: Option<&Given>,
 ) -> JointOutcome {
     let joint = &model.joints[j];
     let n = y.len();
@@ -271,11 +281,53 @@ fn analyze_joint(
     let mismatches: Vec<Mismatch> = spans.iter().map(|s| describe_mismatch(rec, joint, y, &derivs, &residual, *s)).collect();
 
     let candidates: Vec<EffectKind> = EffectKind::FITTABLE.into_iter().filter(|k| k.applies_to(joint.kind)).collect();
-    let (chosen, confidence) = if spans.is_empty() {
-        (nominal.clone(), Vec::new())
-    } else {
+    let select_here = || {
         let s = select::select(&problem, &derivs, &candidates, cfg.max_terms, cfg.min_mismatch_samples);
         (s.chosen, s.confidence)
+    };
+    let mut fell_back = false;
+    let (chosen, confidence) = match given {
+        // Structure from effort space; parameters refined by output error (DIDIM). When the
+        // motion is still far from explained (effort space could not see an effect that acts
+        // mostly near a stop, say), the terms are chosen here instead.
+        Some(g) => {
+            let mut refined = if g.effects.is_empty() {
+                nominal.clone()
+            } else {
+                fit::fit(&problem, &g.effects, Some(&free_mask(&g.effects)), None, 25)
+            };
+            // The refined levels face the same materiality rule as in effort space: a weight
+            // change that shrank below it is dropped.
+            let rules = effort::SelectionRules::default();
+            if let Some(k) = refined.effects.iter().position(|e| e.kind == EffectKind::MassScale && (e.params[0] - 1.0).abs() < rules.min_mass_change) {
+                let mut rest = refined.effects.clone();
+                rest.remove(k);
+                refined = if rest.is_empty() { nominal.clone() } else { fit::fit(&problem, &rest, Some(&free_mask(&rest)), None, 25) };
+            }
+            let physics = JointPhysics::with_effects(joint, &refined.effects);
+            let left = fit::segment_residual(&problem, &physics, &refined.states);
+            let worst = mismatch_spans(&left, sigma, cfg.min_mismatch_samples).iter().map(|s| rmse_over(&left, *s)).fold(0.0, f64::max);
+            // Relative to the model as written: on real data the encoder noise is far below any
+            // model's error, so σ alone would send every joint back.
+            let rms = |r: &[f64]| {
+                let v: Vec<f64> = r.iter().copied().filter(|x| x.is_finite()).collect();
+                (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+            };
+            let unexplained = rms(&left) > 0.5 * rms(&residual);
+            if !spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma {
+                fell_back = true;
+                select_here()
+            } else {
+                let confidence = refined
+                    .effects
+                    .iter()
+                    .map(|e| g.effects.iter().position(|x| x.kind == e.kind).and_then(|k| g.confidence.get(k).copied()).unwrap_or(0.5))
+                    .collect();
+                (refined, confidence)
+            }
+        }
+        None if spans.is_empty() => (nominal.clone(), Vec::new()),
+        None => select_here(),
     };
     let fitted_physics = JointPhysics::with_effects(joint, &chosen.effects);
     let mut effects: Vec<EffectReport> = chosen
@@ -285,11 +337,24 @@ fn analyze_joint(
         .zip(&confidence)
         .map(|((e, sd), c)| effect_report(joint, &terms[0], gravity, e, sd, *c))
         .collect();
+    if let Some(g) = given.filter(|_| !fell_back) {
+        // Effort space's `unknown` stands when the exact simulation confirms that the motion is
+        // not explained either (impacts and smoothing inflate the residual effort of a joint that
+        // often hits its stops).
+        let after = fit::segment_residual(&problem, &fitted_physics, &chosen.states);
+        let worst = mismatch_spans(&after, sigma, cfg.min_mismatch_samples).iter().map(|s| rmse_over(&after, *s)).fold(0.0, f64::max);
+        if worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma {
+            effects.extend(g.extra.iter().cloned());
+        }
+    }
     if !spans.is_empty() {
         let after = fit::segment_residual(&problem, &fitted_physics, &chosen.states);
         let left = mismatch_spans(&after, sigma, cfg.min_mismatch_samples);
-        if !left.is_empty() {
-            let worst = left.iter().map(|s| rmse_over(&after, *s)).fold(0.0, f64::max);
+        let worst = left.iter().map(|s| rmse_over(&after, *s)).fold(0.0, f64::max);
+        // After effort space chose the terms, `unknown` is effort space's (sized in effort
+        // units against the joint's own efforts), unless the terms were chosen here.
+        let material = given.is_none() || (fell_back && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma);
+        if !left.is_empty() && material {
             let ranges: Vec<String> = left.iter().map(|s| format!("{:.2}–{:.2} s", rec.time_s[s.start], rec.time_s[s.end])).collect();
             effects.push(EffectReport {
                 joint: joint.name.clone(),
@@ -322,8 +387,11 @@ fn analyze_joint(
         RmsePair::default()
     } else {
         let nominal_t = fit::fit(&train_problem, &[], None, None, 25);
-        let chosen_t =
-            if chosen.effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, &chosen.effects, None, None, 25) };
+        let chosen_t = if chosen.effects.is_empty() {
+            nominal_t.clone()
+        } else {
+            fit::fit(&train_problem, &chosen.effects, Some(&free_mask(&chosen.effects)), None, 25)
+        };
         let s0 = train_problem.segments[0].start;
         let b = open_loop_from(&input, &nominal_physics, s0, nominal_t.states[0]);
         let a = open_loop_from(&input, &JointPhysics::with_effects(joint, &chosen_t.effects), s0, chosen_t.states[0]);
@@ -345,8 +413,53 @@ fn analyze_joint(
         simulated_after: after_sim,
         noise_sigma: sigma,
     };
-    let analysis = report::JointAnalysis { mode: "position".into(), ..report::JointAnalysis::default() };
+    let analysis = given.map_or_else(
+        || report::JointAnalysis { mode: "position".into(), ..report::JointAnalysis::default() },
+        |g| {
+            let mut a = g.analysis.clone();
+            if fell_back {
+                a.mode = "position".into();
+                a.why.push_str("; the refined terms left the motion unexplained, so they were chosen in position space");
+            }
+            a
+        },
+    );
     JointOutcome { mismatches, effects, all: all_pair, held, sq: (sb, sa, c), series, analysis }
+}
+
+/// Residual (in noise σ) that a joint whose terms came from effort space must still show, after
+/// the output-error refinement, for `unknown`.
+const UNKNOWN_SIGMAS_AFTER_EFFORT: f64 = 8.0;
+
+/// Effects found in effort space for a joint whose parameters are refined in position space.
+#[derive(Debug, Clone)]
+struct Given {
+    /// The structure and starting parameters.
+    effects: Vec<Effect>,
+    /// Confidence from effort space.
+    confidence: Vec<f64>,
+    /// Reports that stay as effort space gave them (`unknown`).
+    extra: Vec<EffectReport>,
+    /// How the joint was analysed.
+    analysis: report::JointAnalysis,
+}
+
+/// Which parameters output error refines: the levels, not the shape parameters effort space
+/// chose on its grid (transition and Stribeck speeds), nor parameters that are absent (NaN).
+fn free_mask(effects: &[Effect]) -> Vec<Vec<bool>> {
+    effects
+        .iter()
+        .map(|e| {
+            e.params
+                .iter()
+                .enumerate()
+                .map(|(p, v)| {
+                    v.is_finite()
+                        && !matches!((e.kind, p), (EffectKind::CoulombFriction, 1) | (EffectKind::StribeckFriction, 2))
+                })
+                .collect()
+        })
+        .collect()
 }
 
 fn describe_mismatch(rec: &Recording, joint: &model::GapJoint, y: &[f64], derivs: &[[f64; 3]], residual: &[f64], span: Span) -> Mismatch {

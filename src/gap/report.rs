@@ -159,6 +159,25 @@ pub struct GapReport {
 /// viscous damping and Coulomb friction, and `<limit>` narrowed by found end stops.
 pub fn fitted_urdf(model: &GapModel, effects: &[EffectReport]) -> Result<String, super::error::GapError> {
     let mut robot = model.robot.clone();
+    // Links massed from their primitives get that mass written out: a URDF writer emits an
+    // `<inertial>` for every link, and one of mass 0 would read back as a massless link.
+    for (link, mass) in robot.links.iter_mut().zip(&model.links) {
+        if mass.from_primitives {
+            let i = mass.inertia_link;
+            link.inertial = urdf_rs::Inertial {
+                origin: urdf_rs::Pose { xyz: urdf_rs::Vec3(mass.com_link_m.to_array()), rpy: urdf_rs::Vec3([0.0; 3]) },
+                mass: urdf_rs::Mass { value: mass.mass_kg },
+                inertia: urdf_rs::Inertia {
+                    ixx: i.x_axis.x,
+                    ixy: i.y_axis.x,
+                    ixz: i.z_axis.x,
+                    iyy: i.y_axis.y,
+                    iyz: i.z_axis.y,
+                    izz: i.z_axis.z,
+                },
+            };
+        }
+    }
     for joint in &mut robot.joints {
         for e in effects.iter().filter(|e| e.joint == joint.name) {
             let kind = EffectKind::from_name(&e.kind);

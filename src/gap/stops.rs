@@ -1,0 +1,123 @@
+//! Stops the model does not have, found in effort space. A stop's force acts only while the joint
+//! is at it, so it has no regressor: the evidence is that at an extreme of the observed motion
+//! that is not a modelled limit, the residual effort of the model as written pushes back from
+//! the extreme, consistently and far beyond its level elsewhere — a free turning point of an
+//! excitation trajectory shows no such push. The samples in contact are then left out of the
+//! regression, and the restitution is read off the measured positions around each short impact.
+
+use super::effects::{Effect, EffectKind};
+use super::effort::robust_scale;
+
+/// What the evidence must show.
+#[derive(Debug, Clone, Copy)]
+pub struct StopRules {
+    /// Contact band: this share of the observed travel (or four noise σ) from the extreme.
+    pub band_share: f64,
+    /// The mean residual in contact, over the residual's robust scale away from contact.
+    pub min_push_sigmas: f64,
+    /// The mean residual in contact, over the joint's RMS effort.
+    pub min_push_share: f64,
+    /// Fewest samples in contact.
+    pub min_samples: usize,
+}
+
+impl Default for StopRules {
+    fn default() -> Self {
+        Self { band_share: 0.01, min_push_sigmas: 4.0, min_push_share: 0.1, min_samples: 3 }
+    }
+}
+
+/// A stop found on one joint.
+#[derive(Debug, Clone)]
+pub struct FoundStop {
+    /// The effect (`end_stop`: position, restitution; `blocks_upward`).
+    pub effect: Effect,
+    /// Samples in contact (the band around the stop).
+    pub contact: Vec<bool>,
+    /// Mean push of the stop in contact (effort units).
+    pub push: f64,
+    /// Confidence from how far the push stands out.
+    pub confidence: f64,
+}
+
+/// Looks for an unmodelled stop at each extreme of `y` (raw positions) with the nominal residual
+/// effort `residual` (NaN where unused), `effort_rms` the joint's RMS effort, `noise` the
+/// position noise σ, `limits` the model's stops.
+#[must_use]
+pub fn find_stops(
+    time_s: &[f64],
+    y: &[f64],
+    residual: &[f64],
+    effort_rms: f64,
+    noise: f64,
+    limits: (Option<f64>, Option<f64>),
+    rules: &StopRules,
+) -> Vec<FoundStop> {
+    let finite: Vec<f64> = y.iter().copied().filter(|v| v.is_finite()).collect();
+    let (lo, hi) = finite.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    if !(hi > lo) {
+        return Vec::new();
+    }
+    let band = (rules.band_share * (hi - lo)).max(4.0 * noise);
+    let mut out = Vec::new();
+    for (extreme, upward, limit) in [(hi, true, limits.1), (lo, false, limits.0)] {
+        if limit.is_some_and(|l| (l - extreme).abs() <= 2.0 * band) {
+            continue;
+        }
+        let contact: Vec<bool> = y.iter().map(|&v| v.is_finite() && (v - extreme).abs() <= band).collect();
+        let inside: Vec<f64> = (0..y.len()).filter(|&i| contact[i] && residual[i].is_finite()).map(|i| residual[i]).collect();
+        if inside.len() < rules.min_samples {
+            continue;
+        }
+        let outside: Vec<f64> = (0..y.len()).filter(|&i| !contact[i] && residual[i].is_finite()).map(|i| residual[i]).collect();
+        let scale = robust_scale(&outside).max(1e-12);
+        // An upper stop pushes down: the recorded effort exceeds what the free model needs.
+        let push = inside.iter().sum::<f64>() / inside.len() as f64 * if upward { 1.0 } else { -1.0 };
+        if push < rules.min_push_sigmas * scale || push < rules.min_push_share * effort_rms {
+            continue;
+        }
+        let restitution = restitution(time_s, y, &contact);
+        out.push(FoundStop {
+            effect: Effect { kind: EffectKind::EndStop, params: vec![extreme, restitution], blocks_upward: upward },
+            contact,
+            push,
+            confidence: (1.0 - (-(push / scale) / (2.0 * rules.min_push_sigmas)).exp()).clamp(0.0, 1.0),
+        });
+    }
+    out
+}
+
+/// Median of |speed out| / |speed in| over short visits (impacts that bounce off); 0 when the
+/// joint only ever comes to rest at the stop.
+fn restitution(time_s: &[f64], y: &[f64], contact: &[bool]) -> f64 {
+    let slope = |a: usize, b: usize| -> Option<f64> {
+        let (ya, yb) = (y[a], y[b]);
+        let dt = time_s[b] - time_s[a];
+        (ya.is_finite() && yb.is_finite() && dt > 0.0).then(|| (yb - ya) / dt)
+    };
+    let mut ratios = Vec::new();
+    let mut i = 0;
+    while i < contact.len() {
+        if !contact[i] {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < contact.len() && contact[i] {
+            i += 1;
+        }
+        let end = i - 1;
+        if start >= 3 && end + 3 < y.len() && end - start <= 3 {
+            if let (Some(v_in), Some(v_out)) = (slope(start - 3, start - 1), slope(end + 1, end + 3))
+                && v_in.abs() > 1e-9
+            {
+                ratios.push((v_out / v_in).abs().min(1.0));
+            }
+        }
+    }
+    if ratios.is_empty() {
+        return 0.0;
+    }
+    ratios.sort_by(f64::total_cmp);
+    ratios[ratios.len() / 2]
+}
