@@ -268,6 +268,8 @@ pub struct EffortProblem<'a> {
 /// URDF's own `<dynamics>`; and per body the effort of its inertia alone (mass regressors).
 struct ModelEfforts {
     tau: Vec<Vec<f64>>,
+    /// Gravity's share of `tau` (the effort that holds the tree still at q).
+    gravity: Vec<Vec<f64>>,
     /// body → per dof, per sample.
     body_tau: BTreeMap<usize, Vec<Vec<f64>>>,
 }
@@ -277,6 +279,7 @@ fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVe
     let n = sig.time_s.len();
     let nd = dofs.len();
     let mut tau = vec![vec![f64::NAN; n]; nd];
+    let mut held = vec![vec![f64::NAN; n]; nd];
     let mut body_tau: BTreeMap<usize, Vec<Vec<f64>>> = bodies.iter().map(|&b| (b, vec![vec![f64::NAN; n]; nd])).collect();
     let (mut q, mut qd, mut qdd) = (vec![0.0; nd], vec![0.0; nd], vec![0.0; nd]);
     for i in (0..n).filter(|&i| sig.usable[i]) {
@@ -285,7 +288,9 @@ fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVe
         }
         let k = tree.kinematics(&q, &qd, &qdd, gravity);
         let all = tree.efforts_with(&k, |b| Some(tree.bodies()[b].inertia));
+        let still = tree.inverse_dynamics(&q, &[], &[], gravity);
         for (d, &j) in dofs.iter().enumerate() {
+            held[d][i] = still[d];
             let joint = &model.joints[j];
             let v = qd[d];
             let speed_scale = 1e-3;
@@ -298,7 +303,7 @@ fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVe
             }
         }
     }
-    ModelEfforts { tau, body_tau }
+    ModelEfforts { tau, gravity: held, body_tau }
 }
 
 /// The moving part of a joint: its child body and the bodies welded to it.
@@ -347,9 +352,14 @@ impl<'a> EffortProblem<'a> {
             let measured = sig.effort[d].as_ref()?;
             let ok: Vec<bool> = (0..n).map(|i| sig.usable[i] && train[i] && !excluded[r][i] && me.tau[d][i].is_finite()).collect();
             let residual: Vec<f64> = (0..n).map(|i| if ok[i] { measured[i] - me.tau[d][i] } else { f64::NAN }).collect();
-            let own = rms((0..n).filter(|&i| ok[i]).map(|i| measured[i]));
-            let model_rms = rms((0..n).filter(|&i| ok[i]).map(|i| me.tau[d][i]));
-            rows.push(RowInfo { joint: j, dof: d, residual, effort_rms: own.max(model_rms) });
+            // The joint's own efforts: what is applied, and what gravity and the motion each ask
+            // of it (on a passive joint these cancel, and the applied effort is zero).
+            let rms_of = |f: &dyn Fn(usize) -> f64| rms((0..n).filter(|&i| ok[i]).map(f));
+            let scale = rms_of(&|i| measured[i])
+                .max(rms_of(&|i| me.tau[d][i]))
+                .max(rms_of(&|i| me.gravity[d][i]))
+                .max(rms_of(&|i| me.tau[d][i] - me.gravity[d][i]));
+            rows.push(RowInfo { joint: j, dof: d, residual, effort_rms: scale });
             used.push(ok);
         }
         if used.iter().all(|u| u.iter().filter(|&&x| x).count() < 50) {
@@ -367,7 +377,7 @@ impl<'a> EffortProblem<'a> {
             used,
         };
         problem.fold_of = problem.assign_folds(sig);
-        problem.build_candidates(sig, &me, &part_of);
+        problem.build_candidates(sig, &me, &part_of, gravity.normalize_or_zero());
         problem.weights = problem.rows.iter().map(|r| 1.0 / robust_scale(&r.residual).max(1e-9).powi(2)).collect();
         problem.build_grams();
         Some(problem)
@@ -388,6 +398,20 @@ impl<'a> EffortProblem<'a> {
         let k = self.rules.folds.max(2);
         (0..n).map(|i| (((sig.time_s[i] - t0) / (t1 - t0).max(1e-12) * k as f64) as usize).min(k - 1)).collect()
     }
+}
+
+/// Largest angle between a joint's axis and the vertical for which `gravity_tilt` is a candidate.
+/// A tilt makes gravity act on a joint whose model says it does not (a door hinge); on a joint
+/// far from vertical the model's gravity effort already dominates and a small tilt only scales
+/// it by cos(tilt) — there the sin law would soak up other errors.
+pub const MAX_TILT_AXIS_FROM_VERTICAL_DEG: f64 = 30.0;
+
+/// Whether `gravity_tilt` applies to joint j (axis near vertical at the model's zero pose).
+#[must_use]
+pub fn tilt_applies(model: &GapModel, j: usize, gravity_dir: DVec3) -> bool {
+    let zero = vec![0.0; model.joints.len()];
+    let (_, axis) = model.joint_frame_world(j, &zero);
+    gravity_dir != DVec3::ZERO && axis.normalize_or_zero().dot(gravity_dir).abs() >= MAX_TILT_AXIS_FROM_VERTICAL_DEG.to_radians().cos()
 }
 
 /// Whether joint j has a movable joint above or below it (an arm, a pendulum chain) rather than
@@ -437,7 +461,7 @@ impl EffortProblem<'_> {
     }
 
     /// Every candidate term of every row, with its regressor columns.
-    fn build_candidates(&mut self, sig: &Signals, me: &ModelEfforts, part_of: &[Vec<usize>]) {
+    fn build_candidates(&mut self, sig: &Signals, me: &ModelEfforts, part_of: &[Vec<usize>], gravity_dir: DVec3) {
         let n = sig.time_s.len();
         for r in 0..self.rows.len() {
             let (j, d) = (self.rows[r].joint, self.rows[r].dof);
@@ -478,7 +502,7 @@ impl EffortProblem<'_> {
             }
             // A tilted axis is a property of a joint alone on its body; in a chain the sin law of
             // its own angle does not hold.
-            if joint.kind.is_rotational() && !chain {
+            if joint.kind.is_rotational() && !chain && tilt_applies(self.model, j, gravity_dir) {
                 self.push(r, EffectKind::GravityTilt, Family::Tilt, Vec::new(), false, vec![col(&|x| x[0].sin()), col(&|x| -x[0].cos())]);
             }
             if joint.kind != DofKind::Continuous && hi > lo {

@@ -140,7 +140,9 @@ pub(super) fn analyze_effort_space(
     let dofs = model.dofs();
     let n = rec.time_s.len();
     let positions: Vec<Vec<f64>> = dofs.iter().map(|j| observed.get(j).cloned().unwrap_or_else(|| vec![f64::NAN; n])).collect();
-    let efforts: Vec<Option<Vec<f64>>> = dofs.iter().map(|&j| rec.joint_effort.get(&model.joints[j].name).cloned()).collect();
+    // No effort column: zero applied effort (spec §2).
+    let efforts: Vec<Option<Vec<f64>>> =
+        dofs.iter().map(|&j| Some(rec.joint_effort.get(&model.joints[j].name).cloned().unwrap_or_else(|| vec![0.0; n]))).collect();
     let half_width_s = super::effort::smoothing_half_width(&rec.time_s, &positions, rules.smoothing_half_width_s);
     // The contact exclusions cover the whole support of the two smoothing stages.
     let support_s = half_width_s + 4.0 * (rec.time_s[n - 1] - rec.time_s[0]) / (n.max(2) - 1) as f64;
@@ -311,7 +313,8 @@ fn joint_outcome(
     let analysis = report::JointAnalysis {
         mode: "effort".into(),
         why: format!(
-            "effort recorded and every joint's position recorded: residual effort from inverse dynamics of the whole tree \
+            "every joint's position recorded and every applied effort known (recorded, or zero without a column): \
+             residual effort from inverse dynamics of the whole tree \
              (positions and efforts smoothed alike by a local cubic over ±{:.0} ms)",
             1000.0 * half_width_s
         ),

@@ -164,14 +164,16 @@ fn assemble_report(cfg: &GapConfig, notes: Vec<String>, t_split: f64, outcomes: 
     report
 }
 
-/// Joints analysed in effort space: effort recorded, and every degree of freedom of the model
-/// observed (inverse dynamics needs the whole tree's motion).
-fn effort_space_joints(model: &GapModel, rec: &Recording, observed: &std::collections::BTreeMap<usize, Vec<f64>>) -> Vec<usize> {
+/// Joints analysed in effort space: every degree of freedom of the model observed (inverse
+/// dynamics needs the whole tree's motion) and every applied effort known — recorded, or zero
+/// where the recording has no effort column (spec §2: such a joint has zero applied effort, as a
+/// released door or a swinging pendulum has).
+fn effort_space_joints(model: &GapModel, _rec: &Recording, observed: &std::collections::BTreeMap<usize, Vec<f64>>) -> Vec<usize> {
     let dofs = model.dofs();
     if !dofs.iter().all(|j| observed.contains_key(j)) {
         return Vec::new();
     }
-    dofs.into_iter().filter(|&j| rec.joint_effort.contains_key(&model.joints[j].name)).collect()
+    dofs
 }
 
 fn position_space_reason(model: &GapModel, rec: &Recording, observed: &std::collections::BTreeMap<usize, Vec<f64>>) -> String {
@@ -280,7 +282,9 @@ fn analyze_joint(
     let unit = if joint.kind.is_rotational() { "rad" } else { "m" };
     let mismatches: Vec<Mismatch> = spans.iter().map(|s| describe_mismatch(rec, joint, y, &derivs, &residual, *s)).collect();
 
-    let candidates: Vec<EffectKind> = EffectKind::FITTABLE.into_iter().filter(|k| k.applies_to(joint.kind)).collect();
+    let vertical = effort::tilt_applies(model, j, gravity.normalize_or_zero());
+    let candidates: Vec<EffectKind> =
+        EffectKind::FITTABLE.into_iter().filter(|k| k.applies_to(joint.kind) && (*k != EffectKind::GravityTilt || vertical)).collect();
     let select_here = || {
         let s = select::select(&problem, &derivs, &candidates, cfg.max_terms, cfg.min_mismatch_samples);
         (s.chosen, s.confidence)
@@ -314,9 +318,16 @@ fn analyze_joint(
                 (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
             };
             let unexplained = rms(&left) > 0.5 * rms(&residual);
-            if !spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma {
+            let alternative = (!spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma).then(select_here);
+            // The alternative must prove itself on data it was not fitted to.
+            let better = alternative.as_ref().is_some_and(|(alt, _)| {
+                let mine = held_out(rec, input, y, sigma, joint, &refined.effects, t_split).rmse_after;
+                let theirs = held_out(rec, input, y, sigma, joint, &alt.effects, t_split).rmse_after;
+                theirs * FALLBACK_HELD_OUT_GAIN < mine
+            });
+            if let Some(alt) = alternative.filter(|_| better) {
                 fell_back = true;
-                select_here()
+                alt
             } else {
                 let confidence = refined
                     .effects
@@ -381,26 +392,7 @@ fn analyze_joint(
     let all_pair = RmsePair { rmse_before: (sb / cf).sqrt(), rmse_after: (sa / cf).sqrt() };
 
     // Held out: refit on the first part, open loop through the rest.
-    let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
-    let train_problem = fit::Problem::new(input, y, &train, sigma, joint);
-    let held = if train_problem.segments.is_empty() {
-        RmsePair::default()
-    } else {
-        let nominal_t = fit::fit(&train_problem, &[], None, None, 25);
-        let chosen_t = if chosen.effects.is_empty() {
-            nominal_t.clone()
-        } else {
-            fit::fit(&train_problem, &chosen.effects, Some(&free_mask(&chosen.effects)), None, 25)
-        };
-        let s0 = train_problem.segments[0].start;
-        let b = open_loop_from(&input, &nominal_physics, s0, nominal_t.states[0]);
-        let a = open_loop_from(&input, &JointPhysics::with_effects(joint, &chosen_t.effects), s0, chosen_t.states[0]);
-        let held_mask = |i: usize| rec.time_s[i] >= t_split;
-        let (hb, hc) = rmse_mask(y, &b, held_mask);
-        let (ha, _) = rmse_mask(y, &a, held_mask);
-        let hc = hc.max(1) as f64;
-        RmsePair { rmse_before: (hb / hc).sqrt(), rmse_after: (ha / hc).sqrt() }
-    };
+    let held = held_out(rec, input, y, sigma, joint, &chosen.effects, t_split);
     let residual_of = |sim: &[f64]| y.iter().zip(sim).map(|(a, b)| a - b).collect::<Vec<f64>>();
     let series = JointSeries {
         joint: joint.name.clone(),
@@ -426,6 +418,30 @@ fn analyze_joint(
     );
     JointOutcome { mismatches, effects, all: all_pair, held, sq: (sb, sa, c), series, analysis }
 }
+
+/// Held-out RMSE of the model as written and with `effects`: both fitted on the samples before
+/// `t_split`, simulated open loop through the rest.
+fn held_out(rec: &Recording, input: SimInput<'_>, y: &[f64], sigma: f64, joint: &model::GapJoint, effects: &[Effect], t_split: f64) -> RmsePair {
+    let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
+    let train_problem = fit::Problem::new(input, y, &train, sigma, joint);
+    if train_problem.segments.is_empty() {
+        return RmsePair::default();
+    }
+    let nominal_t = fit::fit(&train_problem, &[], None, None, 25);
+    let chosen_t = if effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, effects, Some(&free_mask(effects)), None, 25) };
+    let s0 = train_problem.segments[0].start;
+    let b = open_loop_from(&input, &JointPhysics::nominal(joint), s0, nominal_t.states[0]);
+    let a = open_loop_from(&input, &JointPhysics::with_effects(joint, &chosen_t.effects), s0, chosen_t.states[0]);
+    let held_mask = |i: usize| rec.time_s[i] >= t_split;
+    let (hb, hc) = rmse_mask(y, &b, held_mask);
+    let (ha, _) = rmse_mask(y, &a, held_mask);
+    let hc = hc.max(1) as f64;
+    RmsePair { rmse_before: (hb / hc).sqrt(), rmse_after: (ha / hc).sqrt() }
+}
+
+/// How much better on held-out data a structure chosen in position space must be than the one
+/// effort space chose, to replace it.
+const FALLBACK_HELD_OUT_GAIN: f64 = 2.0;
 
 /// Residual (in noise σ) that a joint whose terms came from effort space must still show, after
 /// the output-error refinement, for `unknown`.

@@ -61,7 +61,9 @@ pub fn find_stops(
     let band = (rules.band_share * (hi - lo)).max(4.0 * noise);
     let mut out = Vec::new();
     for (extreme, upward, limit) in [(hi, true, limits.1), (lo, false, limits.0)] {
-        if limit.is_some_and(|l| (l - extreme).abs() <= 2.0 * band) {
+        // At or beyond a modelled limit (soft stops let the joint sink into it): the model's.
+        let at_limit = limit.is_some_and(|l| if upward { extreme >= l - 2.0 * band } else { extreme <= l + 2.0 * band });
+        if at_limit {
             continue;
         }
         let contact: Vec<bool> = y.iter().map(|&v| v.is_finite() && (v - extreme).abs() <= band).collect();
