@@ -318,7 +318,12 @@ fn analyze_joint(
                 (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
             };
             let unexplained = rms(&left) > 0.5 * rms(&residual);
-            let alternative = (!spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma).then(select_here);
+            // Only where effort space itself could not explain the efforts (its `unknown`): when it
+            // could, a position misfit comes from how stops are simulated (an engine's soft limits
+            // against our hard ones), not from missing physics.
+            let effort_unexplained = !g.extra.is_empty();
+            let alternative =
+                (effort_unexplained && !spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma).then(select_here);
             // The alternative must prove itself on data it was not fitted to.
             let better = alternative.as_ref().is_some_and(|(alt, _)| {
                 let mine = held_out(rec, input, y, sigma, joint, &refined.effects, t_split).rmse_after;
