@@ -547,7 +547,10 @@ fn report_json_has_the_spec_fields_and_is_empty_when_nothing_is_missing() {
         assert!(keys.contains(&k), "missing {k}: {keys:?}");
     }
     for k in &keys {
-        assert!(["format", "mismatches", "effects", "fit", "fitted_model", "held_out", "noise_sigma", "notes", "joints"].contains(k), "{k}");
+        assert!(
+            ["format", "mismatches", "effects", "fit", "fitted_model", "held_out", "noise_sigma", "notes", "joints"].contains(k),
+            "{k}"
+        );
     }
     assert_eq!(json["effects"], serde_json::json!([]));
     assert_eq!(json["mismatches"], serde_json::json!([]));
@@ -559,20 +562,4 @@ fn report_json_has_the_spec_fields_and_is_empty_when_nothing_is_missing() {
         assert!(pair["rmse_after"].is_number());
     }
     assert!(json["fit"]["rmse_before"].is_number() && json["fit"]["rmse_after"].is_number());
-}
-
-#[test]
-#[ignore]
-fn zz_dump() {
-    let model = model();
-    for (name, effects) in [
-        ("null", vec![]),
-        ("mass", vec![("drawer_slide".to_owned(), TrueEffect::ExtraInertia { scale: 1.8 })]),
-        ("stop", vec![("door_hinge".to_owned(), TrueEffect::EndStop { position: 1.3, restitution: 0.3 })]),
-    ] {
-        let cfg = GenerateConfig { noise: 0.001, dropout_fraction: 0.03, seed: 7, effects, ..GenerateConfig::default() };
-        let csv = generate_recording(&model, &cfg).expect("generates");
-        std::fs::write(format!("/tmp/gen_{name}.csv"), csv).expect("write");
-    }
-    std::fs::write("/tmp/cabinet.urdf", CABINET).expect("write");
 }

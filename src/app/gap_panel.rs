@@ -119,6 +119,24 @@ fn run_analysis(scene_urdf: Option<String>, recording: &Path) -> Result<GapOutco
     }
 }
 
+/// Per joint: how it was analysed and what was considered and not reported, with the reason —
+/// so a user can see that friction was weighed and refused, not forgotten.
+fn considered_ui(ui: &mut egui::Ui, r: &crate::gap::GapReport) {
+    for (joint, a) in &r.joints {
+        let effort = a.effort_residual.map_or(String::new(), |e| {
+            format!(", held-out residual effort {:.4} -> {:.4} of {:.4} RMS", e.rmse_before, e.rmse_after, a.effort_rms.unwrap_or(0.0))
+        });
+        egui::CollapsingHeader::new(format!("{joint}: {} space{effort}; {} terms considered and not reported", a.mode, a.rejected.len()))
+            .id_salt(("gap considered", joint))
+            .show(ui, |ui| {
+                ui.weak(&a.why);
+                for why in &a.rejected {
+                    ui.label(format!("not reported — {why}"));
+                }
+            });
+    }
+}
+
 /// The panel: choose a recording, then findings and plots.
 pub fn gap_ui(ui: &mut egui::Ui, gap: &mut GapState, commands: &mut Vec<AppCommand>) {
     ui.horizontal(|ui| {
@@ -161,8 +179,10 @@ pub fn gap_ui(ui: &mut egui::Ui, gap: &mut GapState, commands: &mut Vec<AppComma
     }
     for e in &r.effects {
         let params: Vec<String> = e.params.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect();
-        ui.label(format!("found on {}: {} ({}), confidence {:.2}", e.joint, e.kind, params.join(", "), e.confidence));
+        ui.label(format!("found on {}: {} ({}), confidence {:.2}", e.joint, e.kind, params.join(", "), e.confidence))
+            .on_hover_text(&e.description);
     }
+    considered_ui(ui, r);
     if r.series.is_empty() {
         return;
     }

@@ -3,7 +3,7 @@
 //! forward dynamics from the two (Featherstone, *Rigid Body Dynamics Algorithms*, ch. 5–6).
 //!
 //! Convention: `τ = M(q) q̈ + b(q, q̇)`, where `b` holds Coriolis, centrifugal and gravity
-//! efforts — the convention of Pinocchio's `rnea`/`crba` and MuJoCo's `qfrc_bias`/`mj_fullM`
+//! efforts — the convention of Pinocchio's `rnea`/`crba` and `MuJoCo`'s `qfrc_bias`/`mj_fullM`
 //! (checked against both by `scripts/check_dynamics.py`). The reality gap uses it for coupled
 //! replays and effort-space identification; anything that simulates a tree can.
 //!
@@ -136,7 +136,7 @@ impl MultiBody {
         &self.bodies
     }
 
-    fn coordinate(&self, v: &[f64], b: &Body) -> f64 {
+    fn coordinate(v: &[f64], b: &Body) -> f64 {
         b.dof.map_or(0.0, |d| v.get(d).copied().unwrap_or(0.0))
     }
 
@@ -148,12 +148,12 @@ impl MultiBody {
             Kinematics { parent_from_body: Vec::with_capacity(n), velocity: Vec::with_capacity(n), acceleration: Vec::with_capacity(n) };
         let base_acceleration = Motion { angular: DVec3::ZERO, linear: -gravity };
         for b in &self.bodies {
-            let x = b.parent_from_joint.then(&b.joint.transform(self.coordinate(q, b)));
+            let x = b.parent_from_joint.then(&b.joint.transform(Self::coordinate(q, b)));
             let (v_parent, a_parent) = b.parent.map_or((Motion::default(), base_acceleration), |p| (k.velocity[p], k.acceleration[p]));
             let s = b.joint.subspace();
-            let vj = s * self.coordinate(qd, b);
+            let vj = s * Self::coordinate(qd, b);
             let v = x.motion_to_child(&v_parent) + vj;
-            let a = x.motion_to_child(&a_parent) + s * self.coordinate(qdd, b) + v.cross_motion(&vj);
+            let a = x.motion_to_child(&a_parent) + s * Self::coordinate(qdd, b) + v.cross_motion(&vj);
             k.parent_from_body.push(x);
             k.velocity.push(v);
             k.acceleration.push(a);
@@ -205,7 +205,7 @@ impl MultiBody {
     pub fn mass_matrix(&self, q: &[f64]) -> Vec<f64> {
         let n = self.dof_count;
         let placements: Vec<ParentFromChild> =
-            self.bodies.iter().map(|b| b.parent_from_joint.then(&b.joint.transform(self.coordinate(q, b)))).collect();
+            self.bodies.iter().map(|b| b.parent_from_joint.then(&b.joint.transform(Self::coordinate(q, b)))).collect();
         let mut composite: Vec<RigidInertia> = self.bodies.iter().map(|b| b.inertia).collect();
         for i in (0..self.bodies.len()).rev() {
             if let Some(p) = self.bodies[i].parent {

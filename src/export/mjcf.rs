@@ -109,7 +109,8 @@ pub fn joint_name(scene: &SceneModel, child: &PartModel) -> String {
 }
 
 /// Turns fitted effects into per-joint MJCF dynamics for `scene`. Effects on one joint add up
-/// (two damping terms sum); `mass_scale` becomes `armature = (scale − 1) ×` the modelled inertia
+/// (two damping terms sum); `armature` is MuJoCo's own; Coulomb and Stribeck friction become
+/// `frictionloss` (the sliding level); `mass_scale` becomes `armature = (scale − 1) ×` the modelled inertia
 /// of the joint's subtree about (or along) the axis at rest, with masses from `cfg`. Effects MJCF
 /// cannot express on a joint (soft-close, gravity tilt, unknown, a lighter-than-modelled mass
 /// scale) and effects on joints the scene does not have come back as warnings.
@@ -134,7 +135,16 @@ pub fn dynamics_from_effects(scene: &SceneModel, cfg: &UrdfConfig, effects: &[Fi
         let d = table.entry(e.joint.clone()).or_default();
         match e.kind.as_str() {
             "viscous_damping" => d.damping += p("damping").max(0.0),
-            "coulomb_friction" => d.frictionloss += p("friction").max(0.0),
+            // MuJoCo's frictionloss is one symmetric level, regularised by the solver: a smooth
+            // transition is what it does anyway; a direction-dependent level takes the mean.
+            "coulomb_friction" => {
+                let forward = p("friction").max(0.0);
+                let reverse = e.params.get("friction_reverse").copied().filter(|v| v.is_finite()).map_or(forward, |r| r.max(0.0));
+                d.frictionloss += 0.5 * (forward + reverse);
+            }
+            // The sliding level; the breakaway excess has no MJCF attribute.
+            "stribeck_friction" => d.frictionloss += p("friction").max(0.0),
+            "armature" => d.armature += p("armature").max(0.0),
             "spring" => {
                 d.stiffness += p("stiffness");
                 d.springref = p("rest_position");

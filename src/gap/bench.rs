@@ -247,7 +247,8 @@ pub fn motion_ranges(report: &GapReport) -> BTreeMap<String, f64> {
         .series
         .iter()
         .map(|s| {
-            let (lo, hi) = s.measured.iter().filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+            let (lo, hi) =
+                s.measured.iter().filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
             (s.joint.clone(), if hi >= lo { hi - lo } else { 0.0 })
         })
         .collect()
@@ -258,9 +259,10 @@ pub fn motion_ranges(report: &GapReport) -> BTreeMap<String, f64> {
 pub fn score(truth: &GapTruth, report: &GapReport, ranges: &BTreeMap<String, f64>) -> CaseScore {
     let joints = joint_scores(truth, report);
     let kinds_exact = joints.iter().all(|j| j.exact);
-    let located = truth.effects.iter().all(|e| {
-        report.mismatches.iter().any(|m| m.joint == e.joint) || report.effects.iter().any(|r| r.joint == e.joint)
-    });
+    let located = truth
+        .effects
+        .iter()
+        .all(|e| report.mismatches.iter().any(|m| m.joint == e.joint) || report.effects.iter().any(|r| r.joint == e.joint));
     let params = truth.effects.iter().flat_map(|e| param_scores(e, report, ranges.get(&e.joint).copied().unwrap_or(0.0))).collect();
     let effect_joints: BTreeSet<&str> = truth.effects.iter().map(|e| e.joint.as_str()).collect();
     let cuts = effect_joints.into_iter().map(|j| cut_score(j, report)).collect();
@@ -274,7 +276,12 @@ pub fn score(truth: &GapTruth, report: &GapReport, ranges: &BTreeMap<String, f64
         .effects
         .iter()
         .filter(|r| r.kind != UNKNOWN)
-        .map(|r| ReportedEffect { joint: r.joint.clone(), kind: r.kind.clone(), confidence: r.confidence, real: truth.has(&r.joint, &r.kind) })
+        .map(|r| ReportedEffect {
+            joint: r.joint.clone(),
+            kind: r.kind.clone(),
+            confidence: r.confidence,
+            real: truth.has(&r.joint, &r.kind),
+        })
         .collect();
     CaseScore { joints, kinds_exact, located, params, cuts, false_positives, reported }
 }
@@ -334,12 +341,8 @@ fn param_scores(effect: &TruthEffect, report: &GapReport, range: f64) -> Vec<Par
 /// |got − truth|, modulo 2π for `equilibrium_position` (the angle of a sine law).
 fn param_error(name: &str, got: f64, truth: f64) -> f64 {
     let d = got - truth;
-    if name == "equilibrium_position" {
-        (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
-    } else {
-        d
-    }
-    .abs()
+    if name == "equilibrium_position" { (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI } else { d }
+        .abs()
 }
 
 fn cut_score(joint: &str, report: &GapReport) -> CutScore {
@@ -549,7 +552,8 @@ impl GapBenchSummary {
 }
 
 fn calibration<'a>(effects: impl Iterator<Item = &'a ReportedEffect>) -> Vec<CalibrationBin> {
-    let mut bins: Vec<CalibrationBin> = CONFIDENCE_BINS.iter().map(|&(lo, hi)| CalibrationBin { lo, hi, ..CalibrationBin::default() }).collect();
+    let mut bins: Vec<CalibrationBin> =
+        CONFIDENCE_BINS.iter().map(|&(lo, hi)| CalibrationBin { lo, hi, ..CalibrationBin::default() }).collect();
     for e in effects {
         let c = if e.confidence.is_finite() { e.confidence.clamp(0.0, 1.0) } else { 0.0 };
         let i = CONFIDENCE_BINS.iter().position(|&(_, hi)| c < hi).unwrap_or(CONFIDENCE_BINS.len() - 1);
@@ -680,7 +684,17 @@ fn case_row(c: &CaseResult) -> Vec<String> {
     let yes_no = |b: bool| if b { "yes" } else { "no" }.to_owned();
     let Some(s) = &c.score else {
         let truth = c.truth.as_deref().map_or_else(|| "?".to_owned(), list);
-        return vec![c.case.clone(), c.engine.clone(), truth, "error".into(), "no".into(), "-".into(), "-".into(), "-".into(), format!("{:.2} s", c.seconds)];
+        return vec![
+            c.case.clone(),
+            c.engine.clone(),
+            truth,
+            "error".into(),
+            "no".into(),
+            "-".into(),
+            "-".into(),
+            "-".into(),
+            format!("{:.2} s", c.seconds),
+        ];
     };
     let cut = match (s.cut_ok(), s.min_cut()) {
         (Some(ok), Some(r)) => format!("{r:.1}× {}", if ok { "ok" } else { "low" }),
@@ -711,7 +725,12 @@ impl GapBenchSummary {
             row("0 FP on null cases", count_share(self.null_clean, self.null_cases)),
             row(
                 "params within 25 %",
-                format!("{} of truth params; {}/{} reported", count_share(self.params_ok, self.params_total), self.params_ok, self.params_compared),
+                format!(
+                    "{} of truth params; {}/{} reported",
+                    count_share(self.params_ok, self.params_total),
+                    self.params_ok,
+                    self.params_compared
+                ),
             ),
             row("held-out cut ≥ 5×", count_share(self.cut_ok, self.cut_cases)),
             row("false positives", format!("{} in {} cases", self.false_positives, self.cases_with_false_positives)),
@@ -875,8 +894,12 @@ mod tests {
 
     #[test]
     fn parameter_outside_tolerance_and_sigma() {
-        let input =
-            Input { truth: DOOR, effects: &[("hinge", "viscous_damping", &[("damping", 0.26, 0.01)], 0.9)], held: &[("hinge", 0.5, 0.2)], ..NO_INPUT };
+        let input = Input {
+            truth: DOOR,
+            effects: &[("hinge", "viscous_damping", &[("damping", 0.26, 0.01)], 0.9)],
+            held: &[("hinge", 0.5, 0.2)],
+            ..NO_INPUT
+        };
         check(&input, "exact=true located=true params=0/1 cut=low fp=[] cover=0/1");
     }
 
@@ -934,7 +957,10 @@ mod tests {
             "effects": [{"joint": "slide", "kind": "end_stop", "params": {"position": 0.01, "restitution": 0.2}}]}"#;
         let found: &[Found] = &[("slide", "end_stop", &[("position", 0.05, 0.01), ("restitution", 0.22, 0.05)], 0.9)];
         // 0.04 off: outside 25 % of 0.01, inside 25 % of the 0.3 m motion.
-        check(&Input { truth: STOP, effects: found, held: &[("slide", 1.0, 0.1)], ..NO_INPUT }, "exact=true located=true params=1/2 cut=ok fp=[] cover=1/2");
+        check(
+            &Input { truth: STOP, effects: found, held: &[("slide", 1.0, 0.1)], ..NO_INPUT },
+            "exact=true located=true params=1/2 cut=ok fp=[] cover=1/2",
+        );
         let input = Input { truth: STOP, effects: found, held: &[("slide", 1.0, 0.1)], ranges: &[("slide", 0.3)], ..NO_INPUT };
         check(&input, "exact=true located=true params=2/2 cut=ok fp=[] cover=1/2");
     }
@@ -967,7 +993,10 @@ mod tests {
         let truth = parse_truth(DOOR, Path::new("truth.json")).unwrap();
         let input = Input {
             truth: DOOR,
-            effects: &[("hinge", "viscous_damping", &[("damping", 0.2, 0.01)], 1.0), ("hinge", "armature", &[("armature", 0.1, 0.01)], 0.55)],
+            effects: &[
+                ("hinge", "viscous_damping", &[("damping", 0.2, 0.01)], 1.0),
+                ("hinge", "armature", &[("armature", 0.1, 0.01)], 0.55),
+            ],
             held: &[("hinge", 0.5, 0.01)],
             ..NO_INPUT
         };

@@ -136,7 +136,7 @@ fn stop(p: &JointPhysics, q: &mut f64, v: &mut f64) {
             *q = s.position;
             let into = if s.blocks_upward { *v > 0.0 } else { *v < 0.0 };
             if into {
-                *v = -s.restitution * *v;
+                *v *= -s.restitution;
             }
         }
     }

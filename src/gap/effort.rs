@@ -89,7 +89,7 @@ const CUTOFF_OVER_MOTION: f64 = 5.0;
 /// The smoothing window for these positions: a cubic's cut-off at [`CUTOFF_OVER_MOTION`] × the
 /// fastest joint's dominant frequency (RMS speed over RMS excursion, from a first wide pass), so
 /// that the acceleration keeps the motion and loses the encoder noise. Schafer's rule for
-/// Savitzky–Golay filters: f_c / f_Nyquist ≈ (order + 1) / (3.2 M − 4.6), M the half-width in
+/// Savitzky–Golay filters: `f_c / f_Nyquist ≈ (order + 1) / (3.2 M − 4.6)`, M the half-width in
 /// samples. Between 3 samples and [`MAX_HALF_WIDTH_S`].
 #[must_use]
 pub fn smoothing_half_width(time_s: &[f64], positions: &[Vec<f64>], first_pass_s: f64) -> f64 {
@@ -418,7 +418,8 @@ pub fn tilt_applies(model: &GapModel, j: usize, gravity_dir: DVec3) -> bool {
 /// hanging alone off a fixed body (a door, a drawer).
 #[must_use]
 pub fn in_serial_chain(model: &GapModel, j: usize) -> bool {
-    let movable_below = model.subtree(j).iter().skip(1).any(|&l| model.parent_joint[l].is_some_and(|k| model.joints[k].kind != DofKind::Fixed));
+    let movable_below =
+        model.subtree(j).iter().skip(1).any(|&l| model.parent_joint[l].is_some_and(|k| model.joints[k].kind != DofKind::Fixed));
     let mut link = model.joints[j].parent;
     let mut movable_above = false;
     while let Some(k) = model.parent_joint[link] {
@@ -648,15 +649,11 @@ impl EffortProblem<'_> {
         let mut theta_without = Vec::with_capacity(k);
         for fold in 0..k {
             let theta = self.solve(&cols, Some(fold));
-            for (r, g) in self.grams.iter().enumerate() {
+            for (row_sse, g) in fold_sse.iter_mut().zip(&self.grams) {
                 let (gram, cr, rr, _) = &g.folds[fold];
                 let m = g.columns.len();
-                let local: Vec<(usize, f64)> = g
-                    .columns
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(li, c)| cols.iter().position(|x| x == c).map(|gi| (li, theta[gi])))
-                    .collect();
+                let local: Vec<(usize, f64)> =
+                    g.columns.iter().enumerate().filter_map(|(li, c)| cols.iter().position(|x| x == c).map(|gi| (li, theta[gi]))).collect();
                 let mut sse = *rr;
                 for &(la, ta) in &local {
                     sse -= 2.0 * ta * cr[la];
@@ -664,7 +661,7 @@ impl EffortProblem<'_> {
                         sse += ta * tb * gram[la * m + lb];
                     }
                 }
-                fold_sse[r][fold] = sse.max(0.0);
+                row_sse[fold] = sse.max(0.0);
             }
             theta_without.push(cols.iter().copied().zip(theta).collect());
         }
@@ -674,7 +671,13 @@ impl EffortProblem<'_> {
 
     /// Rows whose fit a candidate changes.
     fn rows_of(&self, c: usize) -> Vec<usize> {
-        self.candidates[c].columns.iter().flat_map(|&col| self.columns[col].rows.keys().copied()).collect::<std::collections::BTreeSet<_>>().into_iter().collect()
+        self.candidates[c]
+            .columns
+            .iter()
+            .flat_map(|&col| self.columns[col].rows.keys().copied())
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect()
     }
 
     /// RMS effort of candidate c's term on its own row under `theta`.
@@ -704,11 +707,11 @@ struct Verdict {
 }
 
 trait NanOrNonNegative {
-    fn is_nan_or_nonneg(self) -> bool;
+    fn nan_or_nonneg(self) -> bool;
 }
 
 impl NanOrNonNegative for f64 {
-    fn is_nan_or_nonneg(self) -> bool {
+    fn nan_or_nonneg(self) -> bool {
         self.is_nan() || self >= 0.0
     }
 }
@@ -734,7 +737,9 @@ impl EffortProblem<'_> {
             (0..k).filter(|&f| rows.iter().map(|&r| self.grams[r].folds[f].3).sum::<usize>() >= MIN_FOLD_SAMPLES).collect();
         let better = informative
             .iter()
-            .filter(|&&f| rows.iter().map(|&r| after.fold_sse[r][f]).sum::<f64>() < rows.iter().map(|&r| before.fold_sse[r][f]).sum::<f64>())
+            .filter(|&&f| {
+                rows.iter().map(|&r| after.fold_sse[r][f]).sum::<f64>() < rows.iter().map(|&r| before.fold_sse[r][f]).sum::<f64>()
+            })
             .count();
         let row = self.candidates[c].row;
         Verdict {
@@ -759,7 +764,7 @@ impl EffortProblem<'_> {
         let (lo, hi) = self.rules.mass_scale_range;
         match e.kind {
             EffectKind::MassScale => (lo..=hi).contains(&e.params[0]) && (e.params[0] - 1.0).abs() >= self.rules.min_mass_change,
-            EffectKind::CoulombFriction => e.params[0] >= 0.0 && e.params[2].is_nan_or_nonneg(),
+            EffectKind::CoulombFriction => e.params[0] >= 0.0 && e.params[2].nan_or_nonneg(),
             EffectKind::StribeckFriction => e.params[0] >= 0.0 && e.params[1] > e.params[0],
             EffectKind::ViscousDamping | EffectKind::Armature | EffectKind::SoftClose | EffectKind::Spring => e.params[0] >= 0.0,
             _ => true,
@@ -770,43 +775,61 @@ impl EffortProblem<'_> {
     fn select(&self) -> Vec<usize> {
         let mut chosen: Vec<usize> = Vec::new();
         let mut current = self.evaluate(&chosen);
+        // Forward steps, then pruning; a pruned term can make room for one that was masked, so
+        // the two alternate until nothing is pruned (a few rounds at most).
+        for _ in 0..3 {
+            self.forward(&mut chosen, &mut current);
+            if !self.prune(&mut chosen, &mut current) {
+                break;
+            }
+        }
+        chosen.sort_unstable();
+        chosen
+    }
+
+    /// Adds (or swaps within a family) the candidate that passes and cuts the held-out error most,
+    /// while one does.
+    fn forward(&self, chosen: &mut Vec<usize>, current: &mut Evaluation) {
         for _ in 0..4 * self.rows.len() + 8 {
             let mut best: Option<(usize, Verdict, Evaluation)> = None;
             for c in 0..self.candidates.len() {
                 if chosen.contains(&c) {
                     continue;
                 }
-                let trial = self.with(&chosen, c);
-                let e = self.evaluate(&trial);
-                let v = self.verdict(&current, &e, &self.rows_of(c), c);
+                let e = self.evaluate(&self.with(chosen, c));
+                let v = self.verdict(current, &e, &self.rows_of(c), c);
                 // Ties (look-alike kinds) go to the earlier candidate.
                 if self.passes(&v) && best.as_ref().is_none_or(|(_, bv, _)| v.gain > bv.gain * 1.001 + 1e-12) {
                     best = Some((c, v, e));
                 }
             }
-            let Some((c, _, e)) = best else { break };
-            chosen = self.with(&chosen, c);
-            current = e;
+            let Some((c, _, e)) = best else { return };
+            *chosen = self.with(chosen, c);
+            *current = e;
         }
+    }
+
+    /// Drops chosen terms that no longer pass against the others; true when one was dropped.
+    fn prune(&self, chosen: &mut Vec<usize>, current: &mut Evaluation) -> bool {
+        let mut any = false;
         loop {
             let mut dropped = false;
             for idx in 0..chosen.len() {
                 let rest: Vec<usize> = chosen.iter().copied().enumerate().filter(|&(k, _)| k != idx).map(|(_, c)| c).collect();
                 let e = self.evaluate(&rest);
-                let v = self.verdict(&e, &current, &self.rows_of(chosen[idx]), chosen[idx]);
+                let v = self.verdict(&e, current, &self.rows_of(chosen[idx]), chosen[idx]);
                 if !self.passes(&v) {
-                    chosen = rest;
-                    current = e;
+                    *chosen = rest;
+                    *current = e;
                     dropped = true;
                     break;
                 }
             }
             if !dropped {
-                break;
+                return any;
             }
+            any = true;
         }
-        chosen.sort_unstable();
-        chosen
     }
 
     /// The effect of candidate c with parameters from `theta` (effort-mode layout).

@@ -9,11 +9,11 @@ use glam::DVec3;
 
 use super::chain::{ChainInput, replay};
 use super::effects::{Effect, EffectKind, JointPhysics};
+use super::effort::in_serial_chain;
 use super::effort::{EffortProblem, JointFinding, SelectionRules, signals};
 use super::locate::{Span, mismatch_spans, rmse_over};
-use super::stops::{FoundStop, StopRules, find_stops};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
-use super::effort::in_serial_chain;
+use super::stops::{FoundStop, StopRules, find_stops};
 use super::{GapConfig, GapError, GapModel, Given, JointOutcome, Recording, effect_report, rmse_mask};
 use crate::dynamics::MultiBody;
 
@@ -37,7 +37,9 @@ fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows:
             let (lo, hi) = y.iter().filter(|q| q.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
             let band = (CONTACT_SHARE * (hi - lo).max(1e-6)).max(4.0 * super::locate::noise_sigma(time_s, y));
             let touch_times: Vec<f64> = (0..n)
-                .filter(|&i| y[i].is_finite() && (joint.lower.is_some_and(|l| y[i] <= l + band) || joint.upper.is_some_and(|u| y[i] >= u - band)))
+                .filter(|&i| {
+                    y[i].is_finite() && (joint.lower.is_some_and(|l| y[i] <= l + band) || joint.upper.is_some_and(|u| y[i] >= u - band))
+                })
                 .map(|i| time_s[i])
                 .collect();
             (0..n)
@@ -52,7 +54,12 @@ fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows:
 }
 
 /// The physics of every dof under `effects` (per model joint), and the tree with heavier parts.
-fn fitted_physics(model: &GapModel, tree: &MultiBody, body_of_link: &[Option<usize>], effects: &BTreeMap<usize, Vec<Effect>>) -> (Vec<JointPhysics>, MultiBody) {
+fn fitted_physics(
+    model: &GapModel,
+    tree: &MultiBody,
+    body_of_link: &[Option<usize>],
+    effects: &BTreeMap<usize, Vec<Effect>>,
+) -> (Vec<JointPhysics>, MultiBody) {
     let mut scaled = tree.clone();
     let physics = model
         .dofs()
@@ -62,7 +69,7 @@ fn fitted_physics(model: &GapModel, tree: &MultiBody, body_of_link: &[Option<usi
             let mut p = JointPhysics::with_effects(&model.joints[j], list);
             // The tree carries a heavier part (inertia and weight); the joint's own scale is not
             // applied twice.
-            if p.mass_scale != 1.0 {
+            if (p.mass_scale - 1.0).abs() > 1e-12 {
                 if let Some(b) = body_of_link[model.joints[j].child] {
                     for part in moving_part(tree, b) {
                         scaled = scaled.with_body_scaled(part, p.mass_scale);
@@ -87,7 +94,12 @@ fn moving_part(tree: &MultiBody, body: usize) -> Vec<usize> {
 }
 
 /// Unmodelled stops of every identified joint (same order as `rows_info`).
-fn unmodelled_stops(model: &GapModel, rec: &Recording, positions: &[Vec<f64>], rows_info: &[super::effort::RowInfo]) -> Vec<Vec<FoundStop>> {
+fn unmodelled_stops(
+    model: &GapModel,
+    rec: &Recording,
+    positions: &[Vec<f64>],
+    rows_info: &[super::effort::RowInfo],
+) -> Vec<Vec<FoundStop>> {
     let rules = StopRules::default();
     rows_info
         .iter()
@@ -260,7 +272,11 @@ fn joint_outcome(
         .zip(&f.effect_rms)
         .map(|(((e, sd), c), size)| {
             let mut r = effect_report(joint, &terms, gravity, e, sd, *c);
-            let _ = write!(r.description, " — {size:.4} {force} RMS over the motion, {:.0} % of the joint's own effort", 100.0 * size / f.effort_rms.max(1e-12));
+            let _ = write!(
+                r.description,
+                " — {size:.4} {force} RMS over the motion, {:.0} % of the joint's own effort",
+                100.0 * size / f.effort_rms.max(1e-12)
+            );
             r
         })
         .collect();
@@ -325,7 +341,15 @@ fn joint_outcome(
     JointOutcome { mismatches, effects, all, held, sq: (sb, sa, c), series, analysis }
 }
 
-fn effort_mismatch(rec: &Recording, joint: &super::model::GapJoint, y: &[f64], effort_residual: &[f64], position_residual: &[f64], span: Span, force: &str) -> Mismatch {
+fn effort_mismatch(
+    rec: &Recording,
+    joint: &super::model::GapJoint,
+    y: &[f64],
+    effort_residual: &[f64],
+    position_residual: &[f64],
+    span: Span,
+    force: &str,
+) -> Mismatch {
     let idx: Vec<usize> = (span.start..=span.end).filter(|&i| y[i].is_finite()).collect();
     let (lo, hi) = idx.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| (a.min(y[i]), b.max(y[i])));
     let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 0.0) };

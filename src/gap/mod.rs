@@ -12,6 +12,7 @@ pub mod bench;
 pub mod chain;
 pub mod effects;
 pub mod effort;
+mod effort_mode;
 pub mod error;
 pub mod fit;
 pub mod generate;
@@ -23,9 +24,8 @@ pub mod recording;
 pub mod report;
 pub mod select;
 pub mod sim;
-pub mod stops;
 pub mod smooth;
-mod effort_mode;
+pub mod stops;
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -118,8 +118,18 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     outcomes.extend(
         jobs.par_iter()
             .map(|&(j, y)| {
-                let mut o =
-                    analyze_joint(model, rec, cfg, j, y, &filled, coupling.as_ref().map(|c| c[j].as_slice()), gravity, t_split, given.get(&j));
+                let mut o = analyze_joint(
+                    model,
+                    rec,
+                    cfg,
+                    j,
+                    y,
+                    &filled,
+                    coupling.as_ref().map(|c| c[j].as_slice()),
+                    gravity,
+                    t_split,
+                    given.get(&j),
+                );
                 if !given.contains_key(&j) {
                     o.analysis.why.clone_from(&why);
                 }
@@ -177,13 +187,17 @@ fn effort_space_joints(model: &GapModel, _rec: &Recording, observed: &std::colle
 }
 
 fn position_space_reason(model: &GapModel, rec: &Recording, observed: &std::collections::BTreeMap<usize, Vec<f64>>) -> String {
-    let unobserved: Vec<&str> = model.dofs().into_iter().filter(|j| !observed.contains_key(j)).map(|j| model.joints[j].name.as_str()).collect();
+    let unobserved: Vec<&str> =
+        model.dofs().into_iter().filter(|j| !observed.contains_key(j)).map(|j| model.joints[j].name.as_str()).collect();
     if unobserved.is_empty() {
         "no effort recorded for this joint: its motion is simulated and fitted".into()
     } else if rec.joint_effort.is_empty() {
         "no effort recorded: its motion is simulated and fitted".into()
     } else {
-        format!("joints {} are not observed, so inverse dynamics is not possible: its motion is simulated and fitted", unobserved.join(", "))
+        format!(
+            "joints {} are not observed, so inverse dynamics is not possible: its motion is simulated and fitted",
+            unobserved.join(", ")
+        )
     }
 }
 
@@ -205,7 +219,10 @@ fn coupling_efforts(
     let smoothed: Vec<Vec<[f64; 3]>> = dofs
         .iter()
         .map(|j| {
-            observed.get(j).map_or_else(|| vec![[0.0; 3]; n], |y| smooth::local_cubic(&rec.time_s, &observe::fill_gaps(y), smooth::DEFAULT_HALF_WIDTH_S))
+            observed.get(j).map_or_else(
+                || vec![[0.0; 3]; n],
+                |y| smooth::local_cubic(&rec.time_s, &observe::fill_gaps(y), smooth::DEFAULT_HALF_WIDTH_S),
+            )
         })
         .collect();
     let mut out = vec![vec![0.0; n]; model.joints.len()];
@@ -295,15 +312,14 @@ fn analyze_joint(
         // motion is still far from explained (effort space could not see an effect that acts
         // mostly near a stop, say), the terms are chosen here instead.
         Some(g) => {
-            let mut refined = if g.effects.is_empty() {
-                nominal.clone()
-            } else {
-                fit::fit(&problem, &g.effects, Some(&free_mask(&g.effects)), None, 25)
-            };
+            let mut refined =
+                if g.effects.is_empty() { nominal.clone() } else { fit::fit(&problem, &g.effects, Some(&free_mask(&g.effects)), None, 25) };
             // The refined levels face the same materiality rule as in effort space: a weight
             // change that shrank below it is dropped.
             let rules = effort::SelectionRules::default();
-            if let Some(k) = refined.effects.iter().position(|e| e.kind == EffectKind::MassScale && (e.params[0] - 1.0).abs() < rules.min_mass_change) {
+            if let Some(k) =
+                refined.effects.iter().position(|e| e.kind == EffectKind::MassScale && (e.params[0] - 1.0).abs() < rules.min_mass_change)
+            {
                 let mut rest = refined.effects.clone();
                 rest.remove(k);
                 refined = if rest.is_empty() { nominal.clone() } else { fit::fit(&problem, &rest, Some(&free_mask(&rest)), None, 25) };
@@ -424,16 +440,34 @@ fn analyze_joint(
     JointOutcome { mismatches, effects, all: all_pair, held, sq: (sb, sa, c), series, analysis }
 }
 
+/// Relative uncertainty every fitted level carries on top of its statistical σ: the recording
+/// was made by physics that is not our model (another engine's integrator, regularised
+/// friction, soft stops; a real mechanism), and that difference biases a level by more than the
+/// data's noise does. Measured on the cross-engine suite; reported as part of each σ.
+const MODEL_FORM_FLOOR: f64 = 0.1;
+
+/// Parameters that are positions (no relative floor).
+const POSITION_PARAMS: [&str; 4] = ["rest_position", "equilibrium_position", "position", "engage_position"];
+
 /// Held-out RMSE of the model as written and with `effects`: both fitted on the samples before
 /// `t_split`, simulated open loop through the rest.
-fn held_out(rec: &Recording, input: SimInput<'_>, y: &[f64], sigma: f64, joint: &model::GapJoint, effects: &[Effect], t_split: f64) -> RmsePair {
+fn held_out(
+    rec: &Recording,
+    input: SimInput<'_>,
+    y: &[f64],
+    sigma: f64,
+    joint: &model::GapJoint,
+    effects: &[Effect],
+    t_split: f64,
+) -> RmsePair {
     let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
     let train_problem = fit::Problem::new(input, y, &train, sigma, joint);
     if train_problem.segments.is_empty() {
         return RmsePair::default();
     }
     let nominal_t = fit::fit(&train_problem, &[], None, None, 25);
-    let chosen_t = if effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, effects, Some(&free_mask(effects)), None, 25) };
+    let chosen_t =
+        if effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, effects, Some(&free_mask(effects)), None, 25) };
     let s0 = train_problem.segments[0].start;
     let b = open_loop_from(&input, &JointPhysics::nominal(joint), s0, nominal_t.states[0]);
     let a = open_loop_from(&input, &JointPhysics::with_effects(joint, &chosen_t.effects), s0, chosen_t.states[0]);
@@ -474,10 +508,7 @@ fn free_mask(effects: &[Effect]) -> Vec<Vec<bool>> {
             e.params
                 .iter()
                 .enumerate()
-                .map(|(p, v)| {
-                    v.is_finite()
-                        && !matches!((e.kind, p), (EffectKind::CoulombFriction, 1) | (EffectKind::StribeckFriction, 2))
-                })
+                .map(|(p, v)| v.is_finite() && !matches!((e.kind, p), (EffectKind::CoulombFriction, 1) | (EffectKind::StribeckFriction, 2)))
                 .collect()
         })
         .collect()
@@ -556,8 +587,16 @@ fn effect_report(
     let mut unc = std::collections::BTreeMap::new();
     let mut put = |k: &str, v: f64, s: f64| {
         params.insert(k.to_owned(), v);
+        // Levels carry the model-form floor; positions keep their statistical σ.
+        let floor = if POSITION_PARAMS.contains(&k) {
+            0.0
+        } else if k == "scale" {
+            MODEL_FORM_FLOOR * (v - 1.0).abs()
+        } else {
+            MODEL_FORM_FLOOR * v.abs()
+        };
         if s.is_finite() {
-            unc.insert(k.to_owned(), s);
+            unc.insert(k.to_owned(), s.hypot(floor));
         }
     };
     let description = match e.kind {

@@ -186,7 +186,13 @@ pub fn fitted_urdf(model: &GapModel, effects: &[EffectReport]) -> Result<String,
                 Some(EffectKind::ViscousDamping) => {
                     joint.dynamics.get_or_insert_with(urdf_rs::Dynamics::default).damping += p("damping");
                 }
+                // URDF's friction is one symmetric level: a direction-dependent one writes the mean,
+                // a Stribeck law its sliding level (the rest is in the sidecar).
                 Some(EffectKind::CoulombFriction) => {
+                    let reverse = e.params.get("friction_reverse").copied().unwrap_or(p("friction"));
+                    joint.dynamics.get_or_insert_with(urdf_rs::Dynamics::default).friction += 0.5 * (p("friction") + reverse);
+                }
+                Some(EffectKind::StribeckFriction) => {
                     joint.dynamics.get_or_insert_with(urdf_rs::Dynamics::default).friction += p("friction");
                 }
                 Some(EffectKind::EndStop)
@@ -217,7 +223,13 @@ pub fn sidecar_json(report: &GapReport, model_file: &str) -> String {
         "model": model_file,
         "urdf": report.fitted_model,
         "effects": report.effects,
-        "in_urdf": ["viscous_damping -> <dynamics damping>", "coulomb_friction -> <dynamics friction>", "end_stop -> <limit> (restitution only here)"],
+        "in_urdf": [
+            "viscous_damping -> <dynamics damping>",
+            "coulomb_friction -> <dynamics friction> (the mean of both directions; transition_speed and friction_reverse only here)",
+            "stribeck_friction -> <dynamics friction> (the sliding level; breakaway and stribeck_speed only here)",
+            "end_stop -> <limit> (restitution only here)",
+            "armature, effort_offset, mass_scale, spring, gravity_tilt, soft_close -> only here (MJCF: armature, stiffness/springref)"
+        ],
     });
     serde_json::to_string_pretty(&value).unwrap_or_default()
 }

@@ -55,7 +55,7 @@ pub fn find_stops(
 ) -> Vec<FoundStop> {
     let finite: Vec<f64> = y.iter().copied().filter(|v| v.is_finite()).collect();
     let (lo, hi) = finite.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return Vec::new();
     }
     let band = (rules.band_share * (hi - lo)).max(4.0 * noise);
@@ -109,12 +109,13 @@ fn restitution(time_s: &[f64], y: &[f64], contact: &[bool]) -> f64 {
             i += 1;
         }
         let end = i - 1;
-        if start >= 3 && end + 3 < y.len() && end - start <= 3 {
-            if let (Some(v_in), Some(v_out)) = (slope(start - 3, start - 1), slope(end + 1, end + 3))
-                && v_in.abs() > 1e-9
-            {
-                ratios.push((v_out / v_in).abs().min(1.0));
-            }
+        if start >= 3
+            && end + 3 < y.len()
+            && end - start <= 3
+            && let (Some(v_in), Some(v_out)) = (slope(start - 3, start - 1), slope(end + 1, end + 3))
+            && v_in.abs() > 1e-9
+        {
+            ratios.push((v_out / v_in).abs().min(1.0));
         }
     }
     if ratios.is_empty() {
