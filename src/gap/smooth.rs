@@ -15,9 +15,10 @@ pub const DEFAULT_HALF_WIDTH_S: f64 = 0.05;
 /// Fewest samples on each side of the centre.
 const MIN_SIDE_SAMPLES: usize = 3;
 
-/// Value, first and second derivative of `y` at every sample (NaN where the window holds too few
-/// valid samples). The window is ±`half_width_s`, widened to [`MIN_SIDE_SAMPLES`] valid samples
-/// on each side where the sampling is sparse.
+/// Value, first and second derivative of `y` at every sample, dropouts included (from their
+/// valid neighbours; NaN where the window holds too few valid samples). The window is
+/// ±`half_width_s`, widened to [`MIN_SIDE_SAMPLES`] valid samples on each side where the sampling
+/// is sparse.
 #[must_use]
 pub fn local_cubic(time_s: &[f64], y: &[f64], half_width_s: f64) -> Vec<[f64; 3]> {
     let valid: Vec<usize> = (0..y.len()).filter(|&i| y[i].is_finite() && time_s[i].is_finite()).collect();
@@ -25,40 +26,44 @@ pub fn local_cubic(time_s: &[f64], y: &[f64], half_width_s: f64) -> Vec<[f64; 3]
     if valid.len() < 2 * MIN_SIDE_SAMPLES + 1 {
         return out;
     }
-    let (mut lo, mut hi) = (0usize, 0usize);
-    for (k, &i) in valid.iter().enumerate() {
+    let times: Vec<f64> = valid.iter().map(|&i| time_s[i]).collect();
+    for (i, slot) in out.iter_mut().enumerate() {
         let t0 = time_s[i];
-        while time_s[valid[lo]] < t0 - half_width_s && k - lo > MIN_SIDE_SAMPLES {
-            lo += 1;
+        if !t0.is_finite() {
+            continue;
         }
-        hi = hi.max(k);
-        while hi + 1 < valid.len() && (time_s[valid[hi + 1]] <= t0 + half_width_s || hi - k < MIN_SIDE_SAMPLES) {
-            hi += 1;
-        }
-        let (a, b) = (lo.min(k.saturating_sub(MIN_SIDE_SAMPLES)), hi);
-        let window = &valid[a..=b];
+        // Valid samples within the window, at least MIN_SIDE_SAMPLES on each side.
+        let centre = times.partition_point(|&t| t < t0);
+        let lo = times.partition_point(|&t| t < t0 - half_width_s).min(centre.saturating_sub(MIN_SIDE_SAMPLES));
+        let hi = times.partition_point(|&t| t <= t0 + half_width_s).max((centre + MIN_SIDE_SAMPLES + 1).min(times.len()));
+        let window = &valid[lo..hi];
         if window.len() < 5 {
             continue;
         }
-        // Scaled time keeps the normal equations well conditioned.
-        let scale = window.iter().map(|&w| (time_s[w] - t0).abs()).fold(0.0, f64::max).max(1e-9);
-        let mut ata = [0.0f64; 16];
-        let mut atb = [0.0f64; 4];
-        for &w in window {
-            let s = (time_s[w] - t0) / scale;
-            let phi = [1.0, s, s * s, s * s * s];
-            for r in 0..4 {
-                atb[r] += phi[r] * y[w];
-                for c in 0..4 {
-                    ata[r * 4 + c] += phi[r] * phi[c];
-                }
-            }
-        }
-        if let Some(x) = solve_spd(&ata, &atb, 4) {
-            out[i] = [x[0], x[1] / scale, 2.0 * x[2] / (scale * scale)];
+        if let Some(d) = fit_cubic(time_s, y, window, t0) {
+            *slot = d;
         }
     }
     out
+}
+
+/// Value, first and second derivative at `t0` of the least-squares cubic through `window`.
+fn fit_cubic(time_s: &[f64], y: &[f64], window: &[usize], t0: f64) -> Option<[f64; 3]> {
+    // Scaled time keeps the normal equations well conditioned.
+    let scale = window.iter().map(|&w| (time_s[w] - t0).abs()).fold(0.0, f64::max).max(1e-9);
+    let mut ata = [0.0f64; 16];
+    let mut atb = [0.0f64; 4];
+    for &w in window {
+        let s = (time_s[w] - t0) / scale;
+        let phi = [1.0, s, s * s, s * s * s];
+        for r in 0..4 {
+            atb[r] += phi[r] * y[w];
+            for c in 0..4 {
+                ata[r * 4 + c] += phi[r] * phi[c];
+            }
+        }
+    }
+    solve_spd(&ata, &atb, 4).map(|x| [x[0], x[1] / scale, 2.0 * x[2] / (scale * scale)])
 }
 
 #[cfg(test)]
