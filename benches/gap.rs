@@ -48,7 +48,7 @@ fn arm_urdf() -> String {
 fn arm_recording(model: &partscene::gap::GapModel) -> String {
     let (tree, _) = model.multibody().expect("tree");
     let n = 4000;
-    let time: Vec<f64> = (0..n).map(|i| f64::from(i) * 0.005).collect();
+    let time: Vec<f64> = (0..n).map(|i| i as f64 * 0.005).collect();
     let effort: Vec<Vec<f64>> = (0..7)
         .map(|d| time.iter().map(|t| 2.0 * ((1.3 + 0.4 * f64::from(d)) * t).sin() + 1.0 * ((3.1 + 0.7 * f64::from(d)) * t).cos()).collect())
         .collect();

@@ -109,7 +109,7 @@ pub fn joint_name(scene: &SceneModel, child: &PartModel) -> String {
 }
 
 /// Turns fitted effects into per-joint MJCF dynamics for `scene`. Effects on one joint add up
-/// (two damping terms sum); `armature` is MuJoCo's own; Coulomb and Stribeck friction become
+/// (two damping terms sum); `armature` is the same `MuJoCo` attribute; Coulomb and Stribeck friction become
 /// `frictionloss` (the sliding level); `mass_scale` becomes `armature = (scale − 1) ×` the modelled inertia
 /// of the joint's subtree about (or along) the axis at rest, with masses from `cfg`. Effects MJCF
 /// cannot express on a joint (soft-close, gravity tilt, unknown, a lighter-than-modelled mass

@@ -361,6 +361,24 @@ fn analyze_joint(
         None if spans.is_empty() => (nominal.clone(), Vec::new()),
         None => select_here(),
     };
+    // Terms chosen in position space must hold on data they were not fitted to: a structure
+    // that makes the held-out replay worse is not reported (it fits how stops or friction are
+    // simulated, not missing physics).
+    let mut rejected_here = Vec::new();
+    let mut held = held_out(rec, input, y, sigma, joint, &chosen.effects, t_split);
+    let (chosen, confidence) = if given.is_none() && !chosen.effects.is_empty() && held.rmse_after >= held.rmse_before {
+        let kinds: Vec<&str> = chosen.effects.iter().map(|e| e.kind.name()).collect();
+        rejected_here.push(format!(
+            "{}: fitted, but the held-out replay got worse ({:.4} → {:.4} {unit}) — not reported",
+            kinds.join(" + "),
+            held.rmse_before,
+            held.rmse_after
+        ));
+        held.rmse_after = held.rmse_before;
+        (nominal.clone(), Vec::new())
+    } else {
+        (chosen, confidence)
+    };
     let fitted_physics = JointPhysics::with_effects(joint, &chosen.effects);
     let mut effects: Vec<EffectReport> = chosen
         .effects
@@ -381,7 +399,10 @@ fn analyze_joint(
     }
     if !spans.is_empty() {
         let after = fit::segment_residual(&problem, &fitted_physics, &chosen.states);
-        let left = mismatch_spans(&after, sigma, cfg.min_mismatch_samples);
+        // Misfit that lies against a modelled stop is how the stop is simulated (hard here, soft
+        // or compliant in the recording), not missing physics: the mismatch says where it is.
+        let left: Vec<Span> =
+            mismatch_spans(&after, sigma, cfg.min_mismatch_samples).into_iter().filter(|s| !mostly_at_a_stop(joint, y, *s)).collect();
         let worst = left.iter().map(|s| rmse_over(&after, *s)).fold(0.0, f64::max);
         // After effort space chose the terms, `unknown` is effort space's (sized in effort
         // units against the joint's own efforts), unless the terms were chosen here.
@@ -412,8 +433,6 @@ fn analyze_joint(
     let cf = c.max(1) as f64;
     let all_pair = RmsePair { rmse_before: (sb / cf).sqrt(), rmse_after: (sa / cf).sqrt() };
 
-    // Held out: refit on the first part, open loop through the rest.
-    let held = held_out(rec, input, y, sigma, joint, &chosen.effects, t_split);
     let residual_of = |sim: &[f64]| y.iter().zip(sim).map(|(a, b)| a - b).collect::<Vec<f64>>();
     let series = JointSeries {
         joint: joint.name.clone(),
@@ -427,7 +446,7 @@ fn analyze_joint(
         noise_sigma: sigma,
     };
     let analysis = given.map_or_else(
-        || report::JointAnalysis { mode: "position".into(), ..report::JointAnalysis::default() },
+        || report::JointAnalysis { mode: "position".into(), rejected: rejected_here.clone(), ..report::JointAnalysis::default() },
         |g| {
             let mut a = g.analysis.clone();
             if fell_back {
@@ -485,6 +504,15 @@ const FALLBACK_HELD_OUT_GAIN: f64 = 2.0;
 /// Residual (in noise σ) that a joint whose terms came from effort space must still show, after
 /// the output-error refinement, for `unknown`.
 const UNKNOWN_SIGMAS_AFTER_EFFORT: f64 = 8.0;
+
+/// Whether most measured samples of `span` are within 5 % of the travel of a modelled stop.
+fn mostly_at_a_stop(joint: &model::GapJoint, y: &[f64], span: Span) -> bool {
+    let (Some(lo), Some(hi)) = (joint.lower, joint.upper) else { return false };
+    let band = 0.05 * (hi - lo).abs();
+    let vals: Vec<f64> = y[span.start..=span.end].iter().copied().filter(|v| v.is_finite()).collect();
+    let near = vals.iter().filter(|&&q| q <= lo + band || q >= hi - band).count();
+    2 * near >= vals.len().max(1)
+}
 
 /// Effects found in effort space for a joint whose parameters are refined in position space.
 #[derive(Debug, Clone)]
