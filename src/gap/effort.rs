@@ -307,7 +307,8 @@ fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVe
 }
 
 /// The moving part of a joint: its child body and the bodies welded to it.
-fn moving_part(tree: &MultiBody, body: usize) -> Vec<usize> {
+#[must_use]
+pub fn moving_part(tree: &MultiBody, body: usize) -> Vec<usize> {
     let mut out = vec![body];
     for (i, b) in tree.bodies().iter().enumerate() {
         if b.dof.is_none() && b.parent.is_some_and(|p| out.contains(&p)) {

@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use super::chain::{ChainInput, replay};
 use super::effects::{Effect, EffectKind, JointPhysics};
-use super::effort::in_serial_chain;
+use super::effort::{in_serial_chain, moving_part};
 use super::effort::{EffortProblem, JointFinding, SelectionRules, signals};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
@@ -81,16 +81,6 @@ fn fitted_physics(
         })
         .collect();
     (physics, scaled)
-}
-
-fn moving_part(tree: &MultiBody, body: usize) -> Vec<usize> {
-    let mut out = vec![body];
-    for (i, b) in tree.bodies().iter().enumerate() {
-        if b.dof.is_none() && b.parent.is_some_and(|p| out.contains(&p)) {
-            out.push(i);
-        }
-    }
-    out
 }
 
 /// Unmodelled stops of every identified joint (same order as `rows_info`).
