@@ -68,7 +68,13 @@ impl Session {
     /// Reads a session; a relative scan path is taken relative to the session file.
     pub fn load(path: &Path) -> Result<Self, EditError> {
         let text = std::fs::read_to_string(path).map_err(|e| EditError::Io { path: path.to_owned(), message: e.to_string() })?;
-        let mut session: Session = serde_json::from_str(&text)
+        Self::parse(&text, path)
+    }
+
+    /// Parses session text as if it were the file `path` (named in errors; a relative scan path is
+    /// taken relative to its folder).
+    pub fn parse(text: &str, path: &Path) -> Result<Self, EditError> {
+        let mut session: Session = serde_json::from_str(text)
             .map_err(|e| EditError::Session { path: path.to_owned(), message: format!("line {}, column {}: {e}", e.line(), e.column()) })?;
         if session.format != SESSION_FORMAT {
             return Err(EditError::Session {

@@ -9,8 +9,8 @@ use glam::DVec3;
 
 use super::chain::{ChainInput, replay};
 use super::effects::{Effect, EffectKind, JointPhysics};
-use super::effort::{in_serial_chain, moving_part};
 use super::effort::{EffortProblem, JointFinding, SelectionRules, signals};
+use super::effort::{in_serial_chain, moving_part};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
 use super::stops::{FoundStop, StopRules, find_stops};

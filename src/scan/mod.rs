@@ -17,6 +17,7 @@ mod write;
 
 pub use error::ScanError;
 pub use labels::labels_json;
+pub use ply::MAX_COORDINATE_M;
 pub use read::{UNASSIGNED, UNKNOWN_CATEGORY, UNKNOWN_LABEL, read_scan, read_scan_bytes};
 pub use write::{scan_to_ply_bytes, write_scan};
 

@@ -121,6 +121,11 @@ pub(crate) fn read_vertices(bytes: &[u8], file: &str, warnings: &mut Vec<Warning
 
     for (name, def) in &header.elements {
         if name != "vertex" {
+            let position = usize::try_from(reader.get_ref().position()).unwrap_or(usize::MAX);
+            let rest = bytes.len().saturating_sub(position);
+            if !check_element_length(def, header.encoding, rest, file)? {
+                continue;
+            }
             let start_line = reader.line();
             Parser::<Skip>::new()
                 .read_payload_for_element(&mut reader, def, &header)
@@ -241,6 +246,46 @@ fn binary_stride(def: &ElementDef) -> Option<usize> {
             PropertyType::List(..) => None,
         })
         .sum()
+}
+
+/// Fewest bytes one element can take: binary, each scalar's size and each list's count; ascii,
+/// one line (a newline) with at least one character per property.
+fn min_element_bytes(def: &ElementDef, encoding: Encoding) -> usize {
+    if encoding == Encoding::Ascii {
+        return def.properties.len().max(1);
+    }
+    def.properties
+        .values()
+        .map(|p| match p.data_type {
+            PropertyType::Scalar(ref s) | PropertyType::List(ref s, _) => match s {
+                ScalarType::Char | ScalarType::UChar => 1,
+                ScalarType::Short | ScalarType::UShort => 2,
+                ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+                ScalarType::Double => 8,
+            },
+        })
+        .sum()
+}
+
+/// An element before `vertex` (skipped, not stored) must fit in the bytes left, at its smallest
+/// size: a count the file cannot hold is refused before the parser loops over it. Returns
+/// whether the element has to be parsed at all: a binary element without properties takes no
+/// bytes, so any count of it is skipped at once instead of counted through one by one.
+fn check_element_length(def: &ElementDef, encoding: Encoding, rest: usize, file: &str) -> Result<bool, ScanError> {
+    let min_bytes = min_element_bytes(def, encoding);
+    if min_bytes == 0 {
+        return Ok(false);
+    }
+    if def.count <= rest / min_bytes {
+        return Ok(true);
+    }
+    Err(ScanError::Truncated {
+        file: file.to_owned(),
+        detail: format!(
+            "the header declares {} `{}` elements of at least {min_bytes} bytes each, but only {rest} bytes follow",
+            def.count, def.name
+        ),
+    })
 }
 
 /// A precise truncation error before parsing when the vertex layout has a fixed size.

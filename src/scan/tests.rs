@@ -392,6 +392,36 @@ fn object_majority_disagreement_and_unassigned_objects() {
     assert!(warnings.iter().any(|w| w.message.contains("the labels say object 5")), "{warnings:?}");
 }
 
+/// Fuzzing (issue 14): a binary element without properties before the vertices, declared 10¹²
+/// times, made the parser count through it for hours; such an element takes no bytes and is
+/// skipped at once, and any element before the vertices must fit in the bytes left.
+#[test]
+fn elements_before_the_vertices_are_bounded_by_the_file_length() {
+    let vertex = "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty int object\nproperty int part\n";
+    let row: Vec<u8> =
+        [0.5_f32.to_le_bytes(), 0.0_f32.to_le_bytes(), 0.0_f32.to_le_bytes(), 3_i32.to_le_bytes(), 4_i32.to_le_bytes()].concat();
+    let with = |element: &str| {
+        let mut ply = format!("ply\nformat binary_little_endian 1.0\n{element}{vertex}end_header\n").into_bytes();
+        ply.extend_from_slice(&row);
+        ply
+    };
+    let start = std::time::Instant::now();
+    check(with("element empty 1000000000000\n"), None, Expect::Ok { parts: 1, points: 1, background: 0 });
+    assert!(start.elapsed().as_secs_f32() < 1.0, "took {:?}", start.elapsed());
+    check(
+        with("element face 1000000000000\nproperty list uchar int vertex_indices\n"),
+        None,
+        Expect::Err("declares 1000000000000 `face` elements of at least 1 bytes each, but only 20 bytes follow"),
+    );
+    check(with("element extra 5\nproperty short a\nproperty double b\n"), None, Expect::Err("`extra` elements of at least 10 bytes"));
+    check(
+        "ply\nformat ascii 1.0\nelement face 9999999999\nproperty list uchar int vertex_indices\nelement vertex 1\nproperty float x\n\
+property float y\nproperty float z\nproperty int object\nproperty int part\nend_header\n3 0 1 2\n0 0 0 1 2\n",
+        None,
+        Expect::Err("declares 9999999999 `face` elements of at least 1 bytes each"),
+    );
+}
+
 #[test]
 fn garbage_never_panics() {
     check([0xff_u8, 0xfe, 0x00, 0x12, 0x80, b'\n', 0xc3], None, Expect::Err("not \"ply\""));
