@@ -166,7 +166,9 @@ impl Primitive {
     #[must_use]
     pub fn sample_surface_local(&self, n: usize) -> Vec<Vec3> {
         let h = self.size * 0.5;
-        let n = n.max(1);
+        // Callers size n from areas and densities; a huge (fuzzed) part must not turn into an
+        // allocation of that size.
+        let n = n.clamp(1, MAX_SURFACE_SAMPLES);
         match self.kind {
             PrimitiveKind::Cuboid => cuboid::sample_surface(h, n),
             PrimitiveKind::Cylinder => cylinder::sample_surface(h.x, h.z, n),
@@ -271,6 +273,10 @@ pub(crate) fn r2(i: usize) -> (f32, f32) {
     let i = i as f64 + 0.5;
     ((i * a1).fract() as f32, (i * a2).fract() as f32)
 }
+
+/// Most surface samples one primitive is ever asked for (a metre-scale part at millimetre
+/// spacing needs about 10⁶).
+pub const MAX_SURFACE_SAMPLES: usize = 4_000_000;
 
 /// Splits `n` samples over areas proportionally (at least one each where the area is positive).
 /// The counts add up to at most `n + areas.len()` whatever the areas (huge, overflowing to
