@@ -14,7 +14,7 @@ use super::effort::{in_serial_chain, moving_part};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
 use super::stops::{FoundStop, StopRules, find_stops};
-use super::{GapConfig, GapError, GapModel, Given, JointOutcome, Recording, effect_report, rmse_mask};
+use super::{GapConfig, GapError, GapModel, Given, JointOutcome, Recording, effect_report, rmse_pair};
 use crate::dynamics::MultiBody;
 
 /// Samples within this share of the travel (or this many noise σ) of a modelled stop are in
@@ -36,19 +36,14 @@ fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows:
             let y = &positions[dofs.iter().position(|&x| x == j).unwrap_or(0)];
             let (lo, hi) = y.iter().filter(|q| q.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
             let band = (CONTACT_SHARE * (hi - lo).max(1e-6)).max(4.0 * super::locate::noise_sigma(time_s, y));
-            let touch_times: Vec<f64> = (0..n)
-                .filter(|&i| {
+            let touching: Vec<bool> = (0..n)
+                .map(|i| {
                     y[i].is_finite() && (joint.lower.is_some_and(|l| y[i] <= l + band) || joint.upper.is_some_and(|u| y[i] >= u - band))
                 })
-                .map(|i| time_s[i])
                 .collect();
-            (0..n)
-                .map(|i| {
-                    let t = time_s[i];
-                    let k = touch_times.partition_point(|&x| x < t - half_width_s);
-                    touch_times.get(k).is_some_and(|&x| x <= t + half_width_s)
-                })
-                .collect()
+            let mut mask = vec![false; n];
+            widen_into(&mut mask, &touching, time_s, half_width_s);
+            mask
         })
         .collect()
 }
@@ -293,29 +288,10 @@ fn joint_outcome(
             ),
         });
     }
-    let (sb, c) = rmse_mask(y, replays.before, |_| true);
-    let (sa, _) = rmse_mask(y, replays.after, |_| true);
-    let cf = c.max(1) as f64;
-    let all = RmsePair { rmse_before: (sb / cf).sqrt(), rmse_after: (sa / cf).sqrt() };
-    let held = replays.held.map_or_else(RmsePair::default, |h| {
-        let keep = |i: usize| rec.time_s[i] >= t_split;
-        let (hb, hc) = rmse_mask(y, replays.before, keep);
-        let (ha, _) = rmse_mask(y, h, keep);
-        let hc = hc.max(1) as f64;
-        RmsePair { rmse_before: (hb / hc).sqrt(), rmse_after: (ha / hc).sqrt() }
-    });
-    let residual_of = |sim: &[f64]| y.iter().zip(sim).map(|(a, b)| a - b).collect::<Vec<f64>>();
-    let series = JointSeries {
-        joint: joint.name.clone(),
-        unit,
-        time_s: rec.time_s.clone(),
-        measured: y.to_vec(),
-        residual_before: residual_of(replays.before),
-        residual_after: residual_of(replays.after),
-        simulated_before: replays.before.to_vec(),
-        simulated_after: replays.after.to_vec(),
-        noise_sigma: super::locate::noise_sigma(&rec.time_s, y),
-    };
+    let (all, sq) = rmse_pair(y, replays.before, replays.after, |_| true);
+    let held = replays.held.map_or_else(RmsePair::default, |h| rmse_pair(y, replays.before, h, |i| rec.time_s[i] >= t_split).0);
+    let noise = super::locate::noise_sigma(&rec.time_s, y);
+    let series = JointSeries::new(&joint.name, unit, &rec.time_s, y, replays.before.to_vec(), replays.after.to_vec(), noise);
     let analysis = report::JointAnalysis {
         mode: "effort".into(),
         why: format!(
@@ -328,7 +304,7 @@ fn joint_outcome(
         effort_residual: Some(RmsePair { rmse_before: f.cv_rms_before, rmse_after: f.cv_rms_after }),
         rejected: f.rejected.clone(),
     };
-    JointOutcome { mismatches, effects, all, held, sq: (sb, sa, c), series, analysis }
+    JointOutcome { mismatches, effects, all, held, sq, series, analysis }
 }
 
 fn effort_mismatch(

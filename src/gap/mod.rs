@@ -250,6 +250,16 @@ fn open_loop_from(input: &SimInput<'_>, physics: &JointPhysics, start: usize, st
     out
 }
 
+/// RMSE of two replays against the measurement over the samples `keep` selects (both over the
+/// samples where the measurement and the first replay are finite), and the squared sums and count
+/// behind them (the report's overall RMSE adds them up over joints).
+fn rmse_pair(y: &[f64], before: &[f64], after: &[f64], keep: impl Fn(usize) -> bool) -> (RmsePair, (f64, f64, usize)) {
+    let (sb, c) = rmse_mask(y, before, &keep);
+    let (sa, _) = rmse_mask(y, after, &keep);
+    let cf = c.max(1) as f64;
+    (RmsePair { rmse_before: (sb / cf).sqrt(), rmse_after: (sa / cf).sqrt() }, (sb, sa, c))
+}
+
 fn rmse_mask(y: &[f64], sim: &[f64], keep: impl Fn(usize) -> bool) -> (f64, usize) {
     let (mut s, mut c) = (0.0, 0usize);
     for i in 0..y.len() {
@@ -428,23 +438,8 @@ fn analyze_joint(
     let start = problem.segments.first().map_or(0, |s| s.start);
     let before_sim = open_loop_from(&input, &nominal_physics, start, nominal.states.first().copied().unwrap_or((y[start], 0.0)));
     let after_sim = open_loop_from(&input, &fitted_physics, start, chosen.states.first().copied().unwrap_or((y[start], 0.0)));
-    let (sb, c) = rmse_mask(y, &before_sim, |_| true);
-    let (sa, _) = rmse_mask(y, &after_sim, |_| true);
-    let cf = c.max(1) as f64;
-    let all_pair = RmsePair { rmse_before: (sb / cf).sqrt(), rmse_after: (sa / cf).sqrt() };
-
-    let residual_of = |sim: &[f64]| y.iter().zip(sim).map(|(a, b)| a - b).collect::<Vec<f64>>();
-    let series = JointSeries {
-        joint: joint.name.clone(),
-        unit,
-        time_s: rec.time_s.clone(),
-        measured: y.to_vec(),
-        residual_before: residual_of(&before_sim),
-        residual_after: residual_of(&after_sim),
-        simulated_before: before_sim,
-        simulated_after: after_sim,
-        noise_sigma: sigma,
-    };
+    let (all_pair, sq) = rmse_pair(y, &before_sim, &after_sim, |_| true);
+    let series = JointSeries::new(&joint.name, unit, &rec.time_s, y, before_sim, after_sim, sigma);
     let analysis = given.map_or_else(
         || report::JointAnalysis { mode: "position".into(), rejected: rejected_here.clone(), ..report::JointAnalysis::default() },
         |g| {
@@ -456,7 +451,7 @@ fn analyze_joint(
             a
         },
     );
-    JointOutcome { mismatches, effects, all: all_pair, held, sq: (sb, sa, c), series, analysis }
+    JointOutcome { mismatches, effects, all: all_pair, held, sq, series, analysis }
 }
 
 /// Relative uncertainty every fitted level carries on top of its statistical σ: the recording
@@ -490,11 +485,7 @@ fn held_out(
     let s0 = train_problem.segments[0].start;
     let b = open_loop_from(&input, &JointPhysics::nominal(joint), s0, nominal_t.states[0]);
     let a = open_loop_from(&input, &JointPhysics::with_effects(joint, &chosen_t.effects), s0, chosen_t.states[0]);
-    let held_mask = |i: usize| rec.time_s[i] >= t_split;
-    let (hb, hc) = rmse_mask(y, &b, held_mask);
-    let (ha, _) = rmse_mask(y, &a, held_mask);
-    let hc = hc.max(1) as f64;
-    RmsePair { rmse_before: (hb / hc).sqrt(), rmse_after: (ha / hc).sqrt() }
+    rmse_pair(y, &b, &a, |i| rec.time_s[i] >= t_split).0
 }
 
 /// How much better on held-out data a structure chosen in position space must be than the one

@@ -129,6 +129,33 @@ pub struct JointAnalysis {
     pub rejected: Vec<String>,
 }
 
+impl JointSeries {
+    /// The series of one joint: measurement, both replays, and their residuals.
+    #[must_use]
+    pub fn new(
+        joint: &str,
+        unit: &'static str,
+        time_s: &[f64],
+        measured: &[f64],
+        before: Vec<f64>,
+        after: Vec<f64>,
+        noise_sigma: f64,
+    ) -> Self {
+        let residual_of = |sim: &[f64]| measured.iter().zip(sim).map(|(a, b)| a - b).collect::<Vec<f64>>();
+        Self {
+            joint: joint.to_owned(),
+            unit,
+            time_s: time_s.to_vec(),
+            measured: measured.to_vec(),
+            residual_before: residual_of(&before),
+            residual_after: residual_of(&after),
+            simulated_before: before,
+            simulated_after: after,
+            noise_sigma,
+        }
+    }
+}
+
 /// The whole report. Serializes to `report.json`; `series` and `fitted` stay in memory.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct GapReport {
