@@ -101,6 +101,7 @@ fn validate(mesh: &TriMesh) -> Result<(), String> {
 
 /// OBJ text: every object and group merged, polygons fan-triangulated, materials not read.
 fn parse_obj(bytes: &[u8]) -> Result<TriMesh, String> {
+    check_obj_face_indices(bytes)?;
     let options = tobj::LoadOptions { single_index: false, triangulate: true, ignore_points: true, ignore_lines: true };
     let mut reader = Cursor::new(bytes);
     let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| Ok((Vec::new(), std::collections::HashMap::new())))
@@ -112,6 +113,51 @@ fn parse_obj(bytes: &[u8]) -> Result<TriMesh, String> {
         mesh.triangles.extend(model.mesh.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
     }
     Ok(mesh)
+}
+
+/// Checks every face index of an OBJ file against the positions, texture coordinates and normals
+/// the file declares, before `tobj` reads it: `tobj` 4.0.5 multiplies an index by the element
+/// width unchecked (an index near `usize::MAX` overflows). Positive indices may point anywhere in
+/// the file; negative ones count back from the elements declared so far, as the format says.
+fn check_obj_face_indices(bytes: &[u8]) -> Result<(), String> {
+    const KINDS: [&str; 3] = ["positions", "texture coordinates", "normals"];
+    let text = String::from_utf8_lossy(bytes);
+    let mut total = [0_i64; 3];
+    for line in text.lines() {
+        match line.split_whitespace().next() {
+            Some("v") => total[0] += 1,
+            Some("vt") => total[1] += 1,
+            Some("vn") => total[2] += 1,
+            _ => {}
+        }
+    }
+    let mut so_far = [0_i64; 3];
+    for (number, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => so_far[0] += 1,
+            Some("vt") => so_far[1] += 1,
+            Some("vn") => so_far[2] += 1,
+            Some("f") => {
+                for corner in words {
+                    for (k, index) in corner.split('/').enumerate().take(3) {
+                        let Ok(i) = index.parse::<i64>() else { continue }; // empty or malformed: tobj reports it
+                        let fits = if i > 0 { i <= total[k] } else { i < 0 && i.checked_neg().is_some_and(|n| n <= so_far[k]) };
+                        if !fits {
+                            return Err(format!(
+                                "OBJ line {}: face index {i} outside the {} {} declared",
+                                number + 1,
+                                if i > 0 { total[k] } else { so_far[k] },
+                                KINDS[k]
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// STL, ASCII or binary (`stl_io` merges identical vertices).
