@@ -19,8 +19,8 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("large_scene");
     group.sample_size(10);
     group.bench_function("reconstruct", |b| b.iter(|| reconstruct(&input, &config, &edits, &Quiet)));
-    group.bench_function("fit_parts", |b| b.iter(|| fit_parts(&input, &config.fit, &edits, &Quiet)));
-    let fitted = fit_parts(&input, &config.fit, &edits, &Quiet);
+    group.bench_function("fit_parts", |b| b.iter(|| fit_parts(&input, &config, &edits, &Quiet)));
+    let fitted = fit_parts(&input, &config, &edits, &Quiet);
     let categories = input.objects.iter().map(|(id, o)| (*id, o.category.clone())).collect();
     group.bench_function("assemble (contact, tree, refine, scene, joints)", |b| {
         b.iter(|| assemble(&fitted, &categories, FloorHint::Height(0.0), &config, &edits));

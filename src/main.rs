@@ -32,6 +32,10 @@ struct Cli {
     /// θc: minimum contact ratio.
     #[arg(long, global = true, value_name = "RATIO")]
     contact_min: Option<f32>,
+    /// A part vocabulary (TOML, the format of `assets/vocabulary.toml`) laid over the built-in
+    /// one: classes of the same name are replaced, new classes are tried first.
+    #[arg(long, global = true, value_name = "FILE.toml")]
+    vocab: Option<PathBuf>,
     /// Log every pipeline stage (scan, primitives, contact graph, tree, refinement steps, joints)
     /// to this Rerun recording (`demo`, `reconstruct`).
     #[cfg(feature = "rerun")]
@@ -316,6 +320,9 @@ fn config(cli: &Cli) -> Result<PipelineConfig> {
     if let Some(v) = cli.contact_min {
         anyhow::ensure!((0.0..=1.0).contains(&v), "--contact-min must be a ratio in [0, 1], got {v}");
         contact.contact_min = v;
+    }
+    if let Some(path) = &cli.vocab {
+        cfg.vocabulary = std::sync::Arc::new(cfg.vocabulary.extended_with_file(path)?);
     }
     Ok(cfg)
 }

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::kinematics::Joint;
+use crate::kinematics::{Joint, JointEvidence};
 use crate::primitive::Primitive;
 use crate::report::Warning;
 use crate::scan::{ObjectId, PartId};
@@ -15,6 +15,10 @@ pub struct SceneModel {
     pub parts: Vec<PartModel>,
     /// The kinematic forest: one joint per non-root part (parent → child), sorted by child.
     pub joints: Vec<Joint>,
+    /// Why each joint has its type, parent and axis, with a confidence; sorted by child. Empty
+    /// for scenes not made by the pipeline (ground truth, old files).
+    #[serde(default)]
+    pub evidence: Vec<JointEvidence>,
     /// Candidate contact edges (the directed graph before Edmonds), sorted by (parent, child).
     pub contact_edges: Vec<ContactEdge>,
     /// Objects, sorted by id.
@@ -115,11 +119,12 @@ pub fn part_color(id: PartId) -> [f32; 3] {
 }
 
 /// The colour of a joint type wherever joints are drawn (editor, headless renders, Rerun), sRGB
-/// 0..1: revolute magenta, prismatic cyan, fixed light grey.
+/// 0..1: revolute magenta, continuous violet, prismatic cyan, fixed light grey.
 #[must_use]
 pub const fn joint_kind_color(kind: crate::kinematics::JointKind) -> [f32; 3] {
     match kind {
         crate::kinematics::JointKind::Revolute => [0.85, 0.24, 0.85],
+        crate::kinematics::JointKind::Continuous => [0.55, 0.35, 0.95],
         crate::kinematics::JointKind::Prismatic => [0.1, 0.75, 0.95],
         crate::kinematics::JointKind::Fixed => [0.78, 0.78, 0.78],
     }

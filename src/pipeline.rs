@@ -13,9 +13,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::fit::{FitConfig, fit_part};
+use crate::kinematics::evidence::CONF_PINNED;
 use crate::kinematics::{
-    Joint, JointKind, KinematicsConfig, estimate_joint, is_base_label, is_handle_label, joint_from_handle, joint_kind_for_label,
-    label_tokens,
+    Joint, JointContext, JointEvidence, JointKind, JointSpec, KinematicsConfig, Template, Vocabulary, decide, estimate_joint,
+    parent_confidence,
 };
 use crate::math::Vec3;
 use crate::model::{ContactEdge, ObjectModel, PartModel, SceneModel};
@@ -35,6 +36,8 @@ pub struct PipelineConfig {
     pub refine: RefineConfig,
     pub kinematics: KinematicsConfig,
     pub scene: SceneConfig,
+    /// The part vocabulary (`assets/vocabulary.toml`, `--vocab FILE`).
+    pub vocabulary: std::sync::Arc<Vocabulary>,
 }
 
 /// Corrections pinned by a person; every run of the pipeline honours them.
@@ -74,7 +77,7 @@ pub struct FittedParts {
 /// Fits a primitive to every part, in parallel; parts that cannot be fitted are reported and
 /// left out.
 #[must_use]
-pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &dyn Progress) -> FittedParts {
+pub fn fit_parts(scan: &Scan, cfg: &PipelineConfig, edits: &PinnedEdits, progress: &dyn Progress) -> FittedParts {
     let total = scan.parts.len();
     let done = AtomicUsize::new(0);
     let results: Vec<Result<PartModel, (PartId, Warning)>> = scan
@@ -96,15 +99,15 @@ pub fn fit_parts(scan: &Scan, cfg: &FitConfig, edits: &PinnedEdits, progress: &d
             }
         }
     }
-    coalign_parts(scan, &mut out.parts, edits);
+    coalign_parts(scan, &mut out.parts, edits, &cfg.vocabulary);
     out
 }
 
 /// Fits one part on its own: with `forced` the kind a person pinned, else the best kind under the
 /// label shape prior. (Co-alignment within the object is left to [`fit_parts`].)
-pub fn fit_one_part(part: &ScanPart, cfg: &FitConfig, forced: Option<PrimitiveKind>) -> Result<PartModel, Warning> {
-    let fit = fit_part(&part.points, cfg, forced)
-        .map(|fit| if forced.is_none() { prefer_box_for_boards(&part.label, &part.points, fit) } else { fit })
+pub fn fit_one_part(part: &ScanPart, cfg: &PipelineConfig, forced: Option<PrimitiveKind>) -> Result<PartModel, Warning> {
+    let fit = fit_part(&part.points, &cfg.fit, forced)
+        .map(|fit| if forced.is_none() { prefer_box_for_boards(&cfg.vocabulary, &part.label, &part.points, fit) } else { fit })
         .map_err(|e| Warning::new("fit", format!("part {}", part.id), format!("{e}; part left out")))?;
     Ok(PartModel {
         id: part.id,
@@ -121,10 +124,10 @@ pub fn fit_one_part(part: &ScanPart, cfg: &FitConfig, forced: Option<PrimitiveKi
 /// axes, and the result is kept when its fit error grows by at most 20 % (or 1 mm). Small parts
 /// such as handles have a near-square cross-section whose roll the points barely determine; left
 /// as fitted, their faces miss the Align test (θa) against the part they are mounted on.
-fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits) {
+fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits, vocab: &Vocabulary) {
     // Base parts first: furniture stands upright.
     parts.par_iter_mut().for_each(|p| {
-        if !is_base_label(&p.label) || p.primitive.kind != PrimitiveKind::Cuboid || edits.primitive_kind.contains_key(&p.id) {
+        if !vocab.is_base(&p.label) || p.primitive.kind != PrimitiveKind::Cuboid || edits.primitive_kind.contains_key(&p.id) {
             return;
         }
         let Some(points) = scan.part(p.id).map(|s| s.points.as_slice()) else { return };
@@ -136,7 +139,7 @@ fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits) {
     // The reference of each object: its most base-like part (the tree's preferred root).
     let mut reference: BTreeMap<ObjectId, ((bool, f32), PartId, Primitive)> = BTreeMap::new();
     for p in parts.iter() {
-        let pref = root_preference(&p.label, &p.primitive);
+        let pref = root_preference(vocab, &p.label, &p.primitive);
         if reference.get(&p.object).is_none_or(|r| pref > r.0) {
             reference.insert(p.object, (pref, p.id, p.primitive));
         }
@@ -225,35 +228,11 @@ fn coalign(points: &[Vec3], fitted: &Primitive, reference: &Primitive, err_befor
     (err_after <= (err_before * 1.2).max(err_before + 0.001)).then_some((candidate, err_after))
 }
 
-/// Labels of parts that are boards or boxes in furniture (bodies, doors, drawers, tops, ...).
-fn is_box_like(label: &str) -> bool {
-    label_tokens(label).any(|t| {
-        matches!(
-            t.as_str(),
-            "body"
-                | "door"
-                | "drawer"
-                | "lid"
-                | "top"
-                | "shelf"
-                | "seat"
-                | "back"
-                | "frame"
-                | "base"
-                | "mattress"
-                | "headboard"
-                | "panel"
-                | "board"
-                | "cabinet"
-        )
-    })
-}
-
 /// A label shape prior: parts whose label names a board or a box keep the cuboid candidate unless
 /// another kind scores clearly better (by more than 25 %). A cabinet body seen only through the
 /// margins around its drawers is a thin frame of points that a cylinder can fit about as well.
-fn prefer_box_for_boards(label: &str, points: &[Vec3], fit: crate::fit::PartFit) -> crate::fit::PartFit {
-    if fit.primitive.kind == PrimitiveKind::Cuboid || !is_box_like(label) {
+fn prefer_box_for_boards(vocab: &Vocabulary, label: &str, points: &[Vec3], fit: crate::fit::PartFit) -> crate::fit::PartFit {
+    if fit.primitive.kind == PrimitiveKind::Cuboid || !vocab.prefers_box(label) {
         return fit;
     }
     let Some(cuboid) =
@@ -284,7 +263,7 @@ pub fn reconstruct_observed(
     observer: &dyn Observer,
 ) -> SceneModel {
     observer.scan(scan);
-    let fitted = fit_parts(scan, &cfg.fit, edits, progress);
+    let fitted = fit_parts(scan, cfg, edits, progress);
     observer.fitted(&fitted.parts);
     let categories: BTreeMap<ObjectId, String> = scan.objects.iter().map(|(id, o)| (*id, o.category.clone())).collect();
     let floor_hint = FloorHint::Points(&scan.background);
@@ -337,7 +316,7 @@ pub fn assemble_observed(
         .par_iter()
         .map(|(&obj, parts)| {
             let view: Vec<TreePart> = parts.iter().map(|p| TreePart { id: p.id, label: &p.label, primitive: &p.primitive }).collect();
-            let (tree, w) = build_part_tree(&view, &cfg.tree, &edits.parent);
+            let (tree, w) = build_part_tree(&view, &cfg.tree, &cfg.vocabulary, &edits.parent);
             observer.contact_graph(obj, tree.root, &tree.edges);
             let mut prims: BTreeMap<PartId, Primitive> = parts.iter().map(|p| (p.id, p.primitive)).collect();
             let mut step = 0;
@@ -373,12 +352,16 @@ pub fn assemble_observed(
     }
     let labels: BTreeMap<PartId, &str> = fitted.parts.iter().map(|p| (p.id, p.label.as_str())).collect();
     let mut joints = Vec::new();
+    let mut evidence = Vec::new();
     for tree in trees.values() {
         for (&child, &parent) in &tree.parent {
-            joints.push(make_joint(tree, parent, child, &final_prims, &labels, cfg, edits));
+            let (joint, why) = make_joint(tree, parent, child, &final_prims, &labels, cfg, edits);
+            joints.push(joint);
+            evidence.push(why);
         }
     }
     joints.sort_by_key(|j| j.child);
+    evidence.sort_by_key(|e| e.child);
     let mut parts: Vec<PartModel> =
         fitted.parts.iter().map(|p| PartModel { primitive: final_prims.get(&p.id).copied().unwrap_or(p.primitive), ..p.clone() }).collect();
     parts.sort_by_key(|p| p.id);
@@ -396,6 +379,7 @@ pub fn assemble_observed(
         source: String::new(),
         parts,
         joints,
+        evidence,
         contact_edges,
         objects,
         relations: graph.relations,
@@ -414,35 +398,58 @@ fn make_joint(
     labels: &BTreeMap<PartId, &str>,
     cfg: &PipelineConfig,
     edits: &PinnedEdits,
-) -> Joint {
+) -> (Joint, JointEvidence) {
+    let vocab = cfg.vocabulary.as_ref();
     let label = labels.get(&child).copied().unwrap_or("");
-    let mut kind = edits.joint_kind.get(&child).copied().unwrap_or_else(|| joint_kind_for_label(label));
-    // A handle mounted on the child tells the front and the side that opens.
-    let handle_of = |words: &dyn Fn(&str) -> bool| {
+    // A handle (or knob) mounted on the child tells the front and the side that opens.
+    let mounted = |grip_only: bool| {
         tree.children(child)
             .into_iter()
-            .find(|c| labels.get(c).is_some_and(|l| words(l)))
+            .find(|c| {
+                labels.get(c).is_some_and(|l| vocab.is_grip(l) || (!grip_only && vocab.classify(l).is_some_and(|m| m.class.name == "knob")))
+            })
             .and_then(|c| prims.get(&c))
             .map(Primitive::center)
     };
-    let handle = handle_of(&|l| is_handle_label(l) || label_tokens(l).any(|t| t == "knob"));
     let (Some(pp), Some(cp)) = (prims.get(&parent), prims.get(&child)) else {
-        return Joint { parent, child, kind: JointKind::Fixed, axis_world: Vec3::X, origin_world: Vec3::ZERO, lower: 0.0, upper: 0.0 };
+        let joint = Joint { parent, child, kind: JointKind::Fixed, axis_world: Vec3::X, origin_world: Vec3::ZERO, lower: 0.0, upper: 0.0 };
+        return (joint, JointEvidence { child, label_rule: "a part without geometry: fixed".into(), ..JointEvidence::default() });
     };
+    let object_parts: Vec<(&Primitive, &str)> = tree
+        .contacts
+        .keys()
+        .flat_map(|&(a, b)| [a, b])
+        .chain(tree.parent.keys().copied())
+        .collect::<std::collections::BTreeSet<PartId>>()
+        .into_iter()
+        .filter(|&id| id != child && id != parent)
+        .filter_map(|id| Some((prims.get(&id)?, labels.get(&id).copied().unwrap_or(""))))
+        .collect();
     // The parent face the child is mounted on (same face index on the refined primitive).
-    let mut mount_normal =
+    let contact_normal =
         tree.contacts.get(&(parent, child)).and_then(|c| crate::contact::surface_planes(pp).get(c.parent_face).map(|f| f.normal));
-    // A part whose label names no joint but which carries a grip: its geometry picks the
-    // template (drawer or door) and its front.
-    if kind == JointKind::Fixed
-        && !edits.joint_kind.contains_key(&child)
-        && !is_handle_label(label)
-        && let Some((k, front)) = handle_of(&is_handle_label).and_then(|h| joint_from_handle(pp, cp, h))
-    {
-        kind = k;
-        mount_normal = Some(front);
+    let ctx = JointContext {
+        label,
+        parent: pp,
+        parent_label: labels.get(&parent).copied().unwrap_or(""),
+        child: cp,
+        grip: mounted(true),
+        mount_normal: contact_normal,
+        others: object_parts,
+    };
+    let mut decision = decide(vocab, &ctx);
+    decision.evidence.child = child;
+    if let Some(&pinned) = edits.joint_kind.get(&child) {
+        decision.kind = pinned;
+        decision.template = vocab.classify(label).map_or(Template::default_for(pinned), |m| m.class.template(pinned));
+        decision.evidence.tests.push(format!("type pinned by a person: {}", pinned.name()));
+        decision.evidence.type_confidence = CONF_PINNED;
+        decision.evidence.template = format!("{:?}", decision.template);
     }
-    let mut joint = estimate_joint(parent, pp, child, cp, label, kind, handle, mount_normal, &cfg.kinematics);
+    let mount_normal = decision.front.or(contact_normal);
+    let spec =
+        JointSpec { kind: decision.kind, template: decision.template, handle: mounted(false), mount_normal, axis_line: decision.axis_line };
+    let mut joint = estimate_joint(parent, pp, child, cp, &spec, &cfg.kinematics);
     if let Some(axis) = edits.axis.get(&child) {
         joint.axis_world = axis.normalize_or(joint.axis_world);
     }
@@ -450,5 +457,32 @@ fn make_joint(
         joint.lower = lo;
         joint.upper = hi;
     }
-    joint
+    let mut evidence = decision.evidence;
+    let (parent_rule, parent_conf) = parent_evidence(tree, parent, child, edits.parent.contains_key(&child));
+    evidence.parent_rule = parent_rule;
+    evidence.parent_confidence = parent_conf;
+    evidence.confidence = evidence.type_confidence * parent_conf;
+    (joint, evidence)
+}
+
+/// Why `parent` was chosen for `child`, and the parent confidence ([`parent_confidence`]).
+fn parent_evidence(tree: &PartTree, parent: PartId, child: PartId, pinned: bool) -> (String, f32) {
+    let weight_of = |p: PartId| tree.edges.iter().find(|e| e.parent == p && e.child == child).map(|e| e.weight);
+    let chosen = weight_of(parent);
+    let runner_up = tree
+        .edges
+        .iter()
+        .filter(|e| e.child == child && e.parent != parent)
+        .max_by(|a, b| a.weight.total_cmp(&b.weight).then(b.parent.cmp(&a.parent)));
+    let conf = parent_confidence(chosen, runner_up.map(|e| e.weight), pinned);
+    let rule = if pinned {
+        format!("parent {parent} pinned by a person")
+    } else {
+        match (chosen, runner_up) {
+            (None, _) => format!("touches no part: hung off the nearest part {parent}"),
+            (Some(w), None) => format!("contact with part {parent} (weight {w:.2}); no other part touches it"),
+            (Some(w), Some(e)) => format!("contact with part {parent} (weight {w:.2}) over part {} (weight {:.2})", e.parent, e.weight),
+        }
+    };
+    (rule, conf)
 }

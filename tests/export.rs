@@ -85,6 +85,7 @@ fn urdf_parses_back_to_the_same_tree() {
             JointKind::Fixed => urdf_rs::JointType::Fixed,
             JointKind::Prismatic => urdf_rs::JointType::Prismatic,
             JointKind::Revolute => urdf_rs::JointType::Revolute,
+            JointKind::Continuous => urdf_rs::JointType::Continuous,
         };
         assert_eq!(uj.joint_type, want);
         if j.kind.is_movable() {

@@ -180,7 +180,7 @@ pub fn fitted_object() -> &'static (FittedParts, BTreeMap<ObjectId, String>) {
         scan.parts.retain(|p| p.object == object);
         scan.objects.retain(|&id, _| id == object);
         scan.background.clear();
-        let fitted = fit_parts(&scan, &PipelineConfig::default().fit, &PinnedEdits::default(), &Quiet);
+        let fitted = fit_parts(&scan, &PipelineConfig::default(), &PinnedEdits::default(), &Quiet);
         let categories = scan.objects.values().map(|o| (o.id, o.category.clone())).collect();
         (fitted, categories)
     })

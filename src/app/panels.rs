@@ -284,7 +284,7 @@ fn tree_node_ui(
                 && j.kind.is_movable()
             {
                 let (mark, _) = ui.allocate_exact_size(Vec2::splat(10.0), Sense::hover());
-                if j.kind == JointKind::Revolute {
+                if j.kind.rotates() {
                     ui.painter().circle_filled(mark.center(), 4.0, kind_color(j.kind));
                 } else {
                     ui.painter().rect_filled(Rect::from_center_size(mark.center(), Vec2::new(10.0, 4.0)), 1.0, kind_color(j.kind));
@@ -384,7 +384,7 @@ pub fn inspector_ui(ui: &mut egui::Ui, state: &AppState, panels: &mut PanelState
     });
     let mut jkind = joint.kind;
     egui::ComboBox::from_label("Joint type").selected_text(jkind.name()).show_ui(ui, |ui| {
-        for k in [JointKind::Fixed, JointKind::Prismatic, JointKind::Revolute] {
+        for k in JointKind::ALL {
             ui.selectable_value(&mut jkind, k, k.name());
         }
     });
@@ -414,7 +414,7 @@ pub fn inspector_ui(ui: &mut egui::Ui, state: &AppState, panels: &mut PanelState
             panels.axis_edit = None;
             commands.push(AppCommand::Edit(EditCommand::SetAxis { child: id, axis_world: glam::Vec3::from_array(axis) }));
         }
-        let unit = if joint.kind == JointKind::Revolute { "rad" } else { "m" };
+        let unit = if joint.kind.rotates() { "rad" } else { "m" };
         let mut limits = match panels.limits_edit {
             Some((p, r, l)) if p == id && r == revision => l,
             _ => [joint.lower, joint.upper],

@@ -142,6 +142,15 @@ pub struct Totals {
     pub map: Option<f32>,
     pub movable_joints: usize,
     pub movable_correct: usize,
+    /// Movable truth joints whose parent the model got right.
+    #[serde(default)]
+    pub movable_parent_correct: usize,
+    /// Movable truth joints the model is confident in (≥ [`CONFIDENT`]) …
+    #[serde(default)]
+    pub confident_joints: usize,
+    /// … and of those, how many have type and parent right.
+    #[serde(default)]
+    pub confident_right: usize,
     pub movable_type_accuracy: Option<f32>,
     pub median_axis_error_deg: Option<f32>,
     pub median_hinge_distance_m: Option<f32>,
@@ -159,6 +168,10 @@ impl Totals {
         let joints = rows.clone().flat_map(|r| r.joints.iter()).filter(|j| j.truth_kind.is_movable());
         let movable_joints = joints.clone().count();
         let movable_correct = joints.clone().filter(|j| j.type_correct).count();
+        let movable_parent_correct = joints.clone().filter(|j| j.parent_correct).count();
+        let confident = joints.clone().filter(|j| j.confidence.is_some_and(|c| c >= CONFIDENT));
+        let confident_joints = confident.clone().count();
+        let confident_right = confident.filter(|j| j.type_correct && j.parent_correct).count();
         Self {
             objects: objects.len(),
             part_chamfer: mean(rows.clone().filter_map(|r| r.chamfer)),
@@ -168,6 +181,9 @@ impl Totals {
             map: mean(rows.clone().filter_map(|r| r.ap)),
             movable_joints,
             movable_correct,
+            movable_parent_correct,
+            confident_joints,
+            confident_right,
             movable_type_accuracy: (movable_joints > 0).then(|| movable_correct as f32 / movable_joints as f32),
             median_axis_error_deg: median(&joints.clone().filter_map(|j| j.axis_error_deg).collect::<Vec<_>>()),
             median_hinge_distance_m: median(&joints.clone().filter_map(|j| j.hinge_distance_m).collect::<Vec<_>>()),
@@ -175,6 +191,9 @@ impl Totals {
         }
     }
 }
+
+/// Joints at or above this confidence count as confident: `bench` reports how often they are right.
+pub const CONFIDENT: f32 = 0.9;
 
 /// The benchmark over a folder.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -220,7 +239,7 @@ fn num(v: Option<f32>, digits: usize) -> String {
 
 fn row_cells(t: &Totals) -> String {
     format!(
-        "{} vs {} | {} vs {} | {} | {}/{} | {} | {} | {}",
+        "{} vs {} | {} vs {} | {} | {}/{} | {}/{} | {}/{} | {} | {} | {}",
         num(t.part_chamfer, 3),
         num(t.object_chamfer, 3),
         num(t.part_iou, 3),
@@ -228,13 +247,17 @@ fn row_cells(t: &Totals) -> String {
         num(t.map, 3),
         t.movable_correct,
         t.movable_joints,
+        t.movable_parent_correct,
+        t.movable_joints,
+        t.confident_right,
+        t.confident_joints,
         num(t.median_axis_error_deg, 1),
         num(t.median_hinge_distance_m.map(|m| m * 100.0), 1),
         num(t.median_prismatic_origin_distance_m.map(|m| m * 100.0), 1),
     )
 }
 
-const HEADER: &str = "| {} | setting | Chamfer ↓ part vs object | IoU ↑ part vs object | edge mAP | movable types | axis err ° (median) | hinge cm (median) | prismatic origin cm (median) |\n| --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: |\n";
+const HEADER: &str = "| {} | setting | Chamfer ↓ part vs object | IoU ↑ part vs object | edge mAP | movable types | movable parents | right at confidence ≥ 0.9 | axis err ° (median) | hinge cm (median) | prismatic origin cm (median) |\n| --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
 
 impl BenchReport {
     /// The tables as markdown: per object, per category, all.

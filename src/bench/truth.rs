@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 
 use crate::assets::{ArticulatedAsset, AssetGeom, AssetJoint, AssetLink, GeomShape};
-use crate::kinematics::{Joint, JointKind, is_handle_label};
+use crate::kinematics::{Joint, JointKind, Vocabulary};
 use crate::math::{Pose, Quat, Vec3};
 use crate::primitive::Primitive;
 use crate::report::Warning;
@@ -44,49 +44,14 @@ pub struct AssetTruth {
     pub warnings: Vec<Warning>,
 }
 
-/// Coarse label words matched inside link (and joint) names, first match wins: a grip, knob,
-/// button or switch before the part it sits on (`drawer_handle` → handle), a base before a switch
-/// (`lightswitchbaseroot` → base), a drawer or door before a position word (`drawer1_top` → drawer),
-/// `slide` before `lid` (which it contains).
-const LABEL_WORDS: &[(&str, &str)] = &[
-    ("handle", "handle"),
-    ("pull", "handle"),
-    ("knob", "knob"),
-    ("dial", "knob"),
-    ("valve", "knob"),
-    ("base", "base"),
-    ("button", "button"),
-    ("switch", "switch"),
-    ("drawer", "drawer"),
-    ("tray", "drawer"),
-    ("door", "door"),
-    ("slide", "slide"),
-    ("lid", "lid"),
-    ("hatch", "hatch"),
-    ("flap", "flap"),
-    ("shelf", "shelf"),
-    ("leg", "leg"),
-    // The moving part of a window is its sash.
-    ("window", "sash"),
-    ("burner", "burner"),
-    ("plate", "plate"),
-    ("hood", "hood"),
-    ("light", "light"),
-    ("led", "light"),
-    ("plank", "plank"),
-    ("frame", "frame"),
-    ("body", "body"),
-    ("top", "top"),
-];
-
-/// The coarse label of a link from its name, else from its parent joint's name; the root part
+/// The label a person would give a link, from its name, else from its parent joint's name: the
+/// vocabulary word the name contains ([`Vocabulary::classify`]: `drawer_handle` → handle,
+/// `drawercase_link` → case, `lightswitchbaseroot` → base, `drawer1_top` → drawer); the root part
 /// defaults to "body", others to "part". Never derived from the joint type.
 #[must_use]
 pub fn coarse_label(link_name: &str, joint_name: Option<&str>, is_root: bool) -> String {
-    let find = |name: &str| {
-        let lower = name.to_ascii_lowercase();
-        LABEL_WORDS.iter().find(|(word, _)| lower.contains(word)).map(|(_, label)| (*label).to_owned())
-    };
+    let vocab = Vocabulary::builtin();
+    let find = |name: &str| vocab.classify(name).map(|m| m.word);
     find(link_name).or_else(|| joint_name.and_then(find)).unwrap_or_else(|| if is_root { "body".into() } else { "part".into() })
 }
 
@@ -122,10 +87,11 @@ const GRIP_MARGIN_M: f32 = 0.003;
 /// `wooden_cabinet_top_handle_vis` mesh lives in the drawer body `cabinet_top`). Links that are
 /// grips themselves, and links whose geometry would be all grip, are not split (`None`).
 fn split_grip<'g>(link: &'g AssetLink, preferred: &[&'g AssetGeom]) -> Option<(Vec<&'g AssetGeom>, Vec<&'g AssetGeom>)> {
-    if is_handle_label(&coarse_label(&link.name, None, false)) {
+    let vocab = Vocabulary::builtin();
+    if vocab.is_grip(&coarse_label(&link.name, None, false)) {
         return None;
     }
-    let named_grip = |g: &AssetGeom| g.names.iter().any(|n| is_handle_label(n));
+    let named_grip = |g: &AssetGeom| g.names.iter().any(|n| vocab.is_grip(n));
     let regions: Vec<(Vec3, Vec3)> = link
         .geoms
         .iter()
@@ -348,9 +314,12 @@ mod tests {
         assert_eq!(coarse_label("lightswitchbaseroot", None, false), "base");
         assert_eq!(coarse_label("knob 1", None, false), "knob");
         assert_eq!(coarse_label("slide_link", None, false), "slide");
-        assert_eq!(coarse_label("ovenroot", None, true), "body");
+        assert_eq!(coarse_label("ovenroot", None, true), "oven");
+        assert_eq!(coarse_label("drawercase_link", None, false), "case");
+        assert_eq!(coarse_label("thing", None, true), "body");
         assert_eq!(coarse_label("thing", Some("right_hinge"), false), "part");
-        assert_eq!(coarse_label("thing", Some("base__drawer"), false), "base");
+        // A joint named after both ends: the part it leads to (vocabulary priority) names the child.
+        assert_eq!(coarse_label("thing", Some("base__drawer"), false), "drawer");
         assert_eq!(category_from_file_name(std::path::Path::new("a/kitchen_counter_obj.urdf")), "kitchen_counter");
         assert_eq!(category_from_file_name(std::path::Path::new("door1_obj.urdf")), "door");
     }

@@ -104,7 +104,7 @@ impl Document {
     /// A document over a scan already in memory.
     #[must_use]
     pub fn from_scan(source: SceneSource, scan: Arc<Scan>, config: PipelineConfig, pins: PinnedEdits, progress: &dyn Progress) -> Self {
-        let auto_fit = fit_parts(&scan, &config.fit, &PinnedEdits::default(), progress);
+        let auto_fit = fit_parts(&scan, &config, &PinnedEdits::default(), progress);
         let categories = scan.objects.iter().map(|(id, o)| (*id, o.category.clone())).collect();
         let mut doc = Self {
             source,
@@ -323,7 +323,7 @@ impl Document {
     /// The fit of `part` as a `kind` (cached), or `None` when the scan has no such part.
     fn kind_fit(&mut self, part: PartId, kind: PrimitiveKind) -> Option<&Result<PartModel, Warning>> {
         let scan_part = self.scan.part(part)?;
-        Some(self.kind_fits.entry((part, kind)).or_insert_with(|| fit_one_part(scan_part, &self.config.fit, Some(kind))))
+        Some(self.kind_fits.entry((part, kind)).or_insert_with(|| fit_one_part(scan_part, &self.config, Some(kind))))
     }
 
     /// The fitted parts under the current pins: cached automatic fits, with pinned kinds re-fitted

@@ -82,6 +82,12 @@ pub struct JointRow {
     /// The child part is not in the model at all.
     pub part_missing: bool,
     pub type_correct: bool,
+    /// The model joins the same two parts (either way round).
+    #[serde(default)]
+    pub parent_correct: bool,
+    /// The model's confidence in its joint ([`crate::kinematics::JointEvidence`]), when it has one.
+    #[serde(default)]
+    pub confidence: Option<f32>,
     /// Undirected angle between the axes, degrees: movable truth joints with the right type only.
     pub axis_error_deg: Option<f32>,
     /// Distance between the hinge lines, metres: revolute joints with the right type only.
@@ -124,11 +130,12 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
                 model.joints.iter().find(|j| (j.parent, j.child) == (t.parent, t.child) || (j.parent, j.child) == (t.child, t.parent));
             let predicted = if part_missing { None } else { same_pair.or_else(|| model.joint_of(t.child)) };
             let predicted_kind = predicted.map(|j| j.kind);
-            let type_correct = predicted_kind == Some(t.kind);
+            // A URDF continuous joint is read as revolute without limits: both turn alike.
+            let type_correct = predicted_kind.map(JointKind::motion_class) == Some(t.kind.motion_class());
             let (mut axis_error_deg, mut hinge_distance_m, mut prismatic_origin_distance_m) = (None, None, None);
             if let Some(p) = predicted.filter(|_| type_correct && t.kind.is_movable()) {
                 axis_error_deg = Some(line_angle_deg(p.axis_world, t.axis_world));
-                if t.kind == JointKind::Revolute {
+                if t.kind.rotates() {
                     hinge_distance_m = Some(line_line_distance(p.origin_world, p.axis_world, t.origin_world, t.axis_world));
                 } else {
                     let centre =
@@ -136,12 +143,16 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
                     prismatic_origin_distance_m = prismatic_origin_distance(p.origin_world, t.axis_world, centre);
                 }
             }
+            let parent_correct = same_pair.is_some() && !part_missing;
+            let confidence = predicted.and_then(|p| model.evidence.iter().find(|e| e.child == p.child)).map(|e| e.confidence);
             JointRow {
                 child: t.child,
                 truth_kind: t.kind,
                 predicted_kind,
                 part_missing,
                 type_correct,
+                parent_correct,
+                confidence,
                 axis_error_deg,
                 hinge_distance_m,
                 prismatic_origin_distance_m,

@@ -288,13 +288,13 @@ fn write_body(
         let d = dynamics.get(&jname).copied().unwrap_or_default();
         let [lo, hi] = d.range.unwrap_or([f64::from(j.lower.min(j.upper)), f64::from(j.upper.max(j.lower))]);
         let kind = if j.kind == JointKind::Prismatic { "slide" } else { "hinge" };
-        let mut attrs = vec![
-            ("name", jname),
-            ("type", kind.to_owned()),
-            ("axis", vec3(j.axis_world.normalize_or(Vec3::X))),
-            ("limited", "true".to_owned()),
-            ("range", format!("{} {}", num64(lo), num64(hi))),
-        ];
+        let mut attrs = vec![("name", jname), ("type", kind.to_owned()), ("axis", vec3(j.axis_world.normalize_or(Vec3::X)))];
+        if j.kind == JointKind::Continuous && d.range.is_none() {
+            attrs.push(("limited", "false".to_owned())); // wheels and turntables turn without end
+        } else {
+            attrs.push(("limited", "true".to_owned()));
+            attrs.push(("range", format!("{} {}", num64(lo), num64(hi))));
+        }
         let mut put = |key: &'static str, v: f64| {
             if v != 0.0 && v.is_finite() {
                 attrs.push((key, num64(v)));

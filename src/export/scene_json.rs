@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::kinematics::Joint;
+use crate::kinematics::{Joint, JointEvidence};
 use crate::model::{ContactEdge, ObjectModel, ObjectRelation, PartModel, SceneModel};
 use crate::primitive::Primitive;
 use crate::report::Warning;
@@ -18,6 +18,9 @@ struct SceneJson {
     floor_z: f32,
     parts: Vec<PartJson>,
     joints: Vec<Joint>,
+    /// Per joint (by child): why its type, parent and axis, and a confidence.
+    #[serde(default)]
+    joint_evidence: Vec<JointEvidence>,
     objects: Vec<ObjectModel>,
     relations: Vec<ObjectRelation>,
     contact_edges: Vec<ContactEdge>,
@@ -70,6 +73,7 @@ pub fn scene_json(scene: &SceneModel) -> String {
             })
             .collect(),
         joints: scene.joints.clone(),
+        joint_evidence: scene.evidence.clone(),
         objects: scene.objects.clone(),
         relations: scene.relations.clone(),
         contact_edges: scene.contact_edges.clone(),
@@ -103,6 +107,7 @@ pub fn scene_from_json(text: &str, path: &str) -> Result<SceneModel, SceneJsonEr
         source: doc.source,
         parts,
         joints: doc.joints,
+        evidence: doc.joint_evidence,
         contact_edges: doc.contact_edges,
         objects: doc.objects,
         relations: doc.relations,

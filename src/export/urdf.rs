@@ -150,8 +150,11 @@ pub fn scene_urdf_robot(scene: &SceneModel, cfg: &UrdfConfig) -> ur::Robot {
             JointKind::Fixed => ur::JointType::Fixed,
             JointKind::Prismatic => ur::JointType::Prismatic,
             JointKind::Revolute => ur::JointType::Revolute,
+            JointKind::Continuous => ur::JointType::Continuous,
         };
         let movable = j.kind.is_movable();
+        // A continuous joint has no position limits (URDF ignores them; written as 0).
+        let limited = movable && j.kind != JointKind::Continuous;
         joints.push(ur::Joint {
             name: format!("{cn}_joint"),
             joint_type,
@@ -160,8 +163,8 @@ pub fn scene_urdf_robot(scene: &SceneModel, cfg: &UrdfConfig) -> ur::Robot {
             child: ur::LinkName { link: cn.clone() },
             axis: ur::Axis { xyz: unit_f64(if movable { j.axis_world } else { Vec3::X }) },
             limit: ur::JointLimit {
-                lower: if movable { f64::from(j.lower) } else { 0.0 },
-                upper: if movable { f64::from(j.upper) } else { 0.0 },
+                lower: if limited { f64::from(j.lower) } else { 0.0 },
+                upper: if limited { f64::from(j.upper) } else { 0.0 },
                 effort: if movable { cfg.effort } else { 0.0 },
                 velocity: if movable { cfg.velocity } else { 0.0 },
             },

@@ -19,7 +19,7 @@ pub fn joint_motion(joint: &Joint, q: f32) -> Pose {
     match joint.kind {
         JointKind::Fixed => Pose::IDENTITY,
         JointKind::Prismatic => Pose::from_translation(axis * q),
-        JointKind::Revolute => {
+        JointKind::Revolute | JointKind::Continuous => {
             // Rotation about the line through `origin_world`: translate to it, rotate, translate back.
             let rotation = Quat::from_axis_angle(axis, q);
             let origin = joint.origin_world;

@@ -1,15 +1,19 @@
-//! Joint templates by part label, fitted to the geometry (paper III-B: "matching the primitive
-//! parts to a library of articulated templates").
+//! Joint templates fitted to the geometry (paper III-B: "matching the primitive parts to a
+//! library of articulated templates"). Which template a part gets comes from its label's class
+//! and the geometric tests ([`super::evidence`]); here each is fitted:
 //!
-//! | label words | joint | axis | pivot / origin | limits |
+//! | template | joint | axis | pivot / origin | limits |
 //! | --- | --- | --- | --- | --- |
-//! | handle, pull, bar, leg, body, ... (anything else) | fixed | — | child centre | 0 |
-//! | drawer, tray | prismatic | the parent's face normal the part sits on, outward | child centre | 0 .. `drawer_travel` × parent depth |
-//! | door, lid, flap, hatch | revolute | the door edge away from its handle (vertical for side doors without one) | on that edge, at the door's back face | 0 .. `revolute_upper_rad` |
-//! | slide, slider, sliding, sash | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
-//! | knob, dial | revolute | the outward face normal | knob centre | −π .. π |
-//! | button, switch | prismatic | into the parent | button centre | 0 .. `button_travel_m` |
-//! | no joint word, but a handle mounted on it | from geometry ([`joint_from_handle`]): drawer (handle centred) or door (thin panel, handle off centre) at the parent's front; else fixed | as drawer / door | as drawer / door | as drawer / door |
+//! | fixed | fixed | — | child centre | 0 |
+//! | drawer | prismatic | the parent's face normal the part sits on, outward | child centre | 0 .. `drawer_travel` × parent depth |
+//! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one; a lid's longer edge towards the parent's centre) | on that edge, at the door's back face | 0 .. `revolute_upper_rad` |
+//! | `sliding_panel` | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
+//! | knob | revolute | the outward face normal (or the round axis a test found) | knob centre | −π .. π |
+//! | rocker | revolute | the part's in-plane axis along its shorter side | part centre | ± `rocker_tilt_rad` |
+//! | button | prismatic | into the parent | button centre | 0 .. `button_travel_m` |
+//! | `lift_off` | prismatic | the round body's axis, outward | lid centre | 0 .. half the body's height |
+//! | swing | revolute | the handle's long axis through its ends | on the body's axis | ± π/2 |
+//! | spin, turn | continuous | the part's round axis (spin) or the mount normal (turn) | part centre | display range ± π |
 //!
 //! Axes are signed so that positive motion opens: a drawer slides out, a door swings away from
 //! its parent.
@@ -17,6 +21,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::joint::{Joint, JointKind};
+use super::vocabulary::Template;
 use crate::math::{UP, Vec3};
 use crate::primitive::Primitive;
 use crate::scan::PartId;
@@ -29,90 +34,14 @@ pub struct KinematicsConfig {
     pub drawer_travel: f32,
     /// Travel of a button, metres.
     pub button_travel_m: f32,
+    /// Tilt of a rocker switch either way, radians.
+    pub rocker_tilt_rad: f32,
 }
 
 impl Default for KinematicsConfig {
     fn default() -> Self {
-        Self { revolute_upper_rad: std::f32::consts::FRAC_PI_2, drawer_travel: 0.85, button_travel_m: 0.005 }
+        Self { revolute_upper_rad: std::f32::consts::FRAC_PI_2, drawer_travel: 0.85, button_travel_m: 0.005, rocker_tilt_rad: 0.26 }
     }
-}
-
-/// The lowercase words of a label (`Door_Left` → `door`, `left`).
-pub fn label_tokens(label: &str) -> impl Iterator<Item = String> + '_ {
-    label.split(|c: char| !c.is_ascii_alphabetic()).filter(|t| !t.is_empty()).map(str::to_ascii_lowercase)
-}
-
-/// A part an object is built on (body, base, frame, top): the preferred root of its tree.
-#[must_use]
-pub fn is_base_label(label: &str) -> bool {
-    label_tokens(label).any(|t| matches!(t.as_str(), "body" | "base" | "frame" | "top" | "carcass" | "cabinet"))
-}
-
-/// A grip mounted on a part to move it (handle, pull, grip, bar).
-#[must_use]
-pub fn is_handle_label(label: &str) -> bool {
-    label_tokens(label).any(|t| matches!(t.as_str(), "handle" | "handles" | "pull" | "grip" | "bar"))
-}
-
-/// A part that moves relative to its parent (door, drawer, lid, knob, button), not a grip.
-#[must_use]
-pub fn is_movable_label(label: &str) -> bool {
-    joint_kind_for_label(label).is_movable() && !is_handle_label(label)
-}
-
-/// Typical attachments of furniture parts (child words → parent words): a handle is mounted on
-/// the door or drawer it moves, legs carry a top or a seat, a headboard and a mattress belong to
-/// the bed frame, a chair back to its seat, doors and drawers to the body.
-const TYPICAL_PARENTS: &[(&[&str], &[&str])] = &[
-    (&["handle", "handles", "pull", "grip", "bar"], &["door", "doors", "drawer", "drawers", "lid", "flap", "hatch", "tray"]),
-    (&["leg", "legs"], &["top", "seat", "base", "frame"]),
-    (&["headboard", "footboard", "mattress"], &["frame", "base"]),
-    (&["back", "backrest", "arm", "armrest"], &["seat"]),
-    (
-        &["door", "doors", "drawer", "drawers", "lid", "flap", "shelf", "hatch", "slide", "slider", "sash"],
-        &["body", "frame", "base", "cabinet", "carcass"],
-    ),
-];
-
-/// Whether `parent_label` names a typical parent of `child_label` ([`TYPICAL_PARENTS`]).
-#[must_use]
-pub fn is_typical_parent(child_label: &str, parent_label: &str) -> bool {
-    let child: Vec<String> = label_tokens(child_label).collect();
-    let parent: Vec<String> = label_tokens(parent_label).collect();
-    TYPICAL_PARENTS.iter().any(|(children, parents)| {
-        child.iter().any(|c| children.contains(&c.as_str())) && parent.iter().any(|p| parents.contains(&p.as_str()))
-    })
-}
-
-/// The joint type a label calls for; unknown labels are rigid.
-#[must_use]
-pub fn joint_kind_for_label(label: &str) -> JointKind {
-    let tokens: Vec<String> = label_tokens(label).collect();
-    let has = |words: &[&str]| tokens.iter().any(|t| words.contains(&t.as_str()));
-    if is_handle_label(label) {
-        JointKind::Fixed
-    } else if has(&["knob", "knobs", "dial", "valve"]) {
-        JointKind::Revolute
-    } else if has(&["button", "buttons", "switch", "drawer", "drawers", "tray"]) || is_sliding_panel(label) {
-        JointKind::Prismatic
-    } else if has(&["door", "doors", "lid", "flap", "hatch"]) {
-        JointKind::Revolute
-    } else {
-        JointKind::Fixed
-    }
-}
-
-/// A panel that slides in its own plane: a sliding door, a window sash.
-fn is_sliding_panel(label: &str) -> bool {
-    label_tokens(label).any(|t| matches!(t.as_str(), "slide" | "slider" | "sliding" | "sash"))
-}
-
-fn is_rotary_knob(label: &str) -> bool {
-    label_tokens(label).any(|t| matches!(t.as_str(), "knob" | "knobs" | "dial" | "valve"))
-}
-
-fn is_button(label: &str) -> bool {
-    label_tokens(label).any(|t| matches!(t.as_str(), "button" | "buttons" | "switch"))
 }
 
 /// The direction in which `child` sticks out of `parent`: one of the parent's six face normals,
@@ -142,35 +71,47 @@ pub fn outward_direction(parent: &Primitive, child: &Primitive, handle: Option<V
     best.1
 }
 
-/// Estimates the joint between `parent` and `child` of the given kind. `handle` is the centre of a
-/// handle or knob mounted on the child, if it has one. `mount_normal` is the outward normal of
-/// the parent face the child is mounted on, from the contact test (paper eq. 1), when there is
-/// one: it is the direction a drawer slides, a door opens towards, a knob turns about. A vertical
-/// mount normal for a door or a drawer (found resting on a shelf rather than hung in the front)
-/// is not trusted; then, and without a contact, [`outward_direction`] decides from the geometry.
+/// What [`estimate_joint`] fits: the type, its template, and what the geometry already told.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointSpec {
+    pub kind: JointKind,
+    pub template: Template,
+    /// Centre of a handle or knob mounted on the child, if it has one.
+    pub handle: Option<Vec3>,
+    /// The outward normal of the parent face the child is mounted on (paper eq. 1), when known.
+    pub mount_normal: Option<Vec3>,
+    /// An axis and a point on it fixed by a geometric test (swing handles, lift-off lids, discs).
+    pub axis_line: Option<(Vec3, Vec3)>,
+}
+
+/// Estimates the joint between `parent` and `child` ([`JointSpec`]; templates in the module
+/// docs). The mount normal is the direction a drawer slides, a door opens towards, a knob turns
+/// about. A vertical mount normal for a side-opening template (drawer, door hinge, sliding panel;
+/// found resting on a shelf rather than hung in the front) is not trusted; then, and without a
+/// contact, [`outward_direction`] decides from the geometry.
 #[must_use]
 pub fn estimate_joint(
     parent_id: PartId,
     parent: &Primitive,
     child_id: PartId,
     child: &Primitive,
-    child_label: &str,
-    kind: JointKind,
-    handle: Option<Vec3>,
-    mount_normal: Option<Vec3>,
+    spec: &JointSpec,
     cfg: &KinematicsConfig,
 ) -> Joint {
-    let side_opening = is_sliding_panel(child_label)
-        || label_tokens(child_label).any(|t| matches!(t.as_str(), "door" | "doors" | "drawer" | "drawers" | "tray"));
-    let out = match mount_normal {
+    let side_opening = matches!(spec.template, Template::SlidingPanel | Template::Drawer | Template::Hinge);
+    let out = match spec.mount_normal {
         Some(n) if !(side_opening && n.dot(UP).abs() > 0.7) => n.normalize_or(Vec3::Z),
-        _ => outward_direction(parent, child, handle),
+        _ => outward_direction(parent, child, spec.handle),
     };
+    let kind = spec.kind;
     let mut joint =
         Joint { parent: parent_id, child: child_id, kind, axis_world: out, origin_world: child.center(), lower: 0.0, upper: 0.0 };
-    match kind {
-        JointKind::Fixed => {}
-        JointKind::Prismatic if is_sliding_panel(child_label) => {
+    if kind == JointKind::Fixed {
+        return joint;
+    }
+    match spec.template {
+        Template::Fixed => {}
+        Template::SlidingPanel => {
             // In its own plane, along the panel's box axis that points towards the parent's
             // centre: that is where the panel has room to go (a sliding door over half a front,
             // a sash over the lower half of its frame); travel up to that gap.
@@ -187,26 +128,72 @@ pub fn estimate_joint(
             joint.axis_world = axis;
             joint.upper = (2.0 * in_plane.dot(axis)).max(0.0).min(parent.extent_along(axis));
         }
-        JointKind::Prismatic if is_button(child_label) => {
+        Template::Button => {
             joint.axis_world = -out;
             joint.upper = cfg.button_travel_m;
         }
-        JointKind::Prismatic => {
-            let depth = parent.extent_along(out);
-            joint.upper = cfg.drawer_travel * depth;
+        Template::Drawer => {
+            joint.upper = cfg.drawer_travel * parent.extent_along(out);
         }
-        JointKind::Revolute if is_rotary_knob(child_label) => {
+        Template::Knob => {
+            if let Some((axis, origin)) = spec.axis_line {
+                joint.axis_world = axis;
+                joint.origin_world = origin;
+            }
             joint.lower = -std::f32::consts::PI;
             joint.upper = std::f32::consts::PI;
         }
-        JointKind::Revolute => {
-            let (axis, pivot) = hinge(parent, child, out, handle);
+        Template::Rocker => {
+            // About the in-plane box axis along the shorter side, through the centre.
+            let axes = child.axes_world();
+            let axis = (0..3)
+                .filter(|&a| axes[a].dot(out).abs() < 0.5)
+                .min_by(|&a, &b| child.size[b].total_cmp(&child.size[a]).then(a.cmp(&b)))
+                .map_or(axes[0], |a| axes[a]);
+            joint.axis_world = axis;
+            joint.lower = -cfg.rocker_tilt_rad;
+            joint.upper = cfg.rocker_tilt_rad;
+        }
+        Template::Hinge | Template::LidHinge => {
+            let (axis, pivot) = hinge(parent, child, out, spec.handle);
             joint.axis_world = axis;
             joint.origin_world = pivot;
             joint.upper = cfg.revolute_upper_rad;
         }
+        Template::LiftOff => {
+            let axis = spec.axis_line.map_or(out, |(a, _)| a);
+            joint.axis_world = axis;
+            joint.upper = 0.5 * parent.extent_along(axis);
+        }
+        Template::Swing => {
+            if let Some((axis, origin)) = spec.axis_line {
+                joint.axis_world = axis;
+                joint.origin_world = origin;
+            }
+            joint.lower = -std::f32::consts::FRAC_PI_2;
+            joint.upper = std::f32::consts::FRAC_PI_2;
+        }
+        Template::Spin | Template::Turn => {
+            joint.axis_world = match (spec.template, spec.axis_line) {
+                (Template::Spin, Some((a, _))) => a,
+                (Template::Spin, None) => round_axis(child),
+                _ => out,
+            };
+            joint.lower = -std::f32::consts::PI;
+            joint.upper = std::f32::consts::PI;
+        }
     }
     joint
+}
+
+/// The axis a round part turns about: a cylinder's or capsule's own axis, else the box axis of
+/// its smallest extent (a disc's thickness).
+fn round_axis(p: &Primitive) -> Vec3 {
+    let axes = p.axes_world();
+    match p.kind {
+        crate::primitive::PrimitiveKind::Cylinder | crate::primitive::PrimitiveKind::Capsule => axes[2],
+        _ => (0..3).min_by(|&a, &b| p.size[a].total_cmp(&p.size[b])).map_or(axes[2], |a| axes[a]),
+    }
 }
 
 /// A handle whose offset from the panel's centre is below this fraction of the panel's half
@@ -321,21 +308,8 @@ fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, handle: Option<Vec3>) 
 mod tests {
     use super::*;
 
-    fn check(label: &str, expected: JointKind) {
-        assert_eq!(joint_kind_for_label(label), expected, "label {label:?}");
-    }
-
-    #[test]
-    fn labels_map_to_joint_types() {
-        check("drawer", JointKind::Prismatic);
-        check("Drawer_2", JointKind::Prismatic);
-        check("door", JointKind::Revolute);
-        check("door_handle", JointKind::Fixed);
-        check("lid", JointKind::Revolute);
-        check("knob", JointKind::Revolute);
-        check("button", JointKind::Prismatic);
-        check("leg", JointKind::Fixed);
-        check("glorp", JointKind::Fixed);
+    fn spec(kind: JointKind, template: Template, handle: Option<Vec3>, mount_normal: Option<Vec3>) -> JointSpec {
+        JointSpec { kind, template, handle, mount_normal, axis_line: None }
     }
 
     /// What [`joint_from_handle`] makes of `child` on `parent` with a handle at `handle`.
@@ -362,8 +336,14 @@ mod tests {
         check_handle(&body, &front, handle, Some((JointKind::Prismatic, Vec3::NEG_Y)));
         check_handle(&body, &deep, handle, Some((JointKind::Prismatic, Vec3::NEG_Y)));
         // Through the pipeline's estimate: slides out of the front by most of the body's depth.
-        let j =
-            estimate_joint(1, &body, 2, &front, "top", JointKind::Prismatic, Some(handle), Some(Vec3::NEG_Y), &KinematicsConfig::default());
+        let j = estimate_joint(
+            1,
+            &body,
+            2,
+            &front,
+            &spec(JointKind::Prismatic, Template::Drawer, Some(handle), Some(Vec3::NEG_Y)),
+            &KinematicsConfig::default(),
+        );
         assert!(j.axis_world.dot(Vec3::NEG_Y) > 0.999 && (j.upper - 0.85 * 0.5).abs() < 1e-5, "{j:?}");
     }
 
@@ -393,7 +373,14 @@ mod tests {
     #[test]
     fn drawer_slides_out_of_the_front_about_its_depth() {
         let drawer = Primitive::cuboid_at(Vec3::new(0.0, 0.26, 0.8), Vec3::new(0.6, 0.02, 0.2));
-        let j = estimate_joint(1, &cabinet_body(), 2, &drawer, "drawer", JointKind::Prismatic, None, None, &KinematicsConfig::default());
+        let j = estimate_joint(
+            1,
+            &cabinet_body(),
+            2,
+            &drawer,
+            &spec(JointKind::Prismatic, Template::Drawer, None, None),
+            &KinematicsConfig::default(),
+        );
         assert!(j.axis_world.dot(Vec3::Y) > 0.999, "{j:?}");
         assert!((j.upper - 0.85 * 0.5).abs() < 1e-5);
     }
@@ -402,7 +389,14 @@ mod tests {
     fn door_hinges_on_the_edge_away_from_its_handle_and_opens_outward() {
         let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
         let handle = Vec3::new(0.36, 0.29, 0.5); // near the door's +x edge
-        let j = estimate_joint(1, &cabinet_body(), 2, &door, "door", JointKind::Revolute, Some(handle), None, &KinematicsConfig::default());
+        let j = estimate_joint(
+            1,
+            &cabinet_body(),
+            2,
+            &door,
+            &spec(JointKind::Revolute, Template::Hinge, Some(handle), None),
+            &KinematicsConfig::default(),
+        );
         assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "vertical hinge: {j:?}");
         assert!((j.origin_world.x - 0.0).abs() < 1e-5, "hinge on the -x edge: {j:?}");
         assert!((j.origin_world.y - 0.25).abs() < 1e-5, "at the back face: {j:?}");
@@ -416,7 +410,14 @@ mod tests {
     fn oven_door_with_handle_on_top_hinges_at_the_bottom() {
         let door = Primitive::cuboid_at(Vec3::new(0.0, 0.26, 0.4), Vec3::new(0.7, 0.02, 0.5));
         let handle = Vec3::new(0.0, 0.29, 0.6);
-        let j = estimate_joint(1, &cabinet_body(), 2, &door, "door", JointKind::Revolute, Some(handle), None, &KinematicsConfig::default());
+        let j = estimate_joint(
+            1,
+            &cabinet_body(),
+            2,
+            &door,
+            &spec(JointKind::Revolute, Template::Hinge, Some(handle), None),
+            &KinematicsConfig::default(),
+        );
         assert!(j.axis_world.dot(Vec3::X).abs() > 0.999, "{j:?}");
         assert!((j.origin_world.z - 0.15).abs() < 1e-5, "{j:?}");
     }
@@ -429,13 +430,20 @@ mod tests {
         let body = cabinet_body();
         let knob = Primitive::cuboid_at(Vec3::new(0.42, 0.2575, 0.9), Vec3::new(0.04, 0.015, 0.04));
         let cfg = KinematicsConfig::default();
-        let guessed = estimate_joint(1, &body, 2, &knob, "knob", JointKind::Revolute, None, None, &cfg);
-        let mounted = estimate_joint(1, &body, 2, &knob, "knob", JointKind::Revolute, None, Some(Vec3::Y), &cfg);
+        let guessed = estimate_joint(1, &body, 2, &knob, &spec(JointKind::Revolute, Template::Knob, None, None), &cfg);
+        let mounted = estimate_joint(1, &body, 2, &knob, &spec(JointKind::Revolute, Template::Knob, None, Some(Vec3::Y)), &cfg);
         assert!(guessed.axis_world.dot(Vec3::X) > 0.99, "position alone picks the side: {guessed:?}");
         assert!(mounted.axis_world.dot(Vec3::Y) > 0.999, "{mounted:?}");
         // A vertical mount normal does not turn a door into a lid.
         let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
-        let j = estimate_joint(1, &body, 2, &door, "door", JointKind::Revolute, Some(Vec3::new(0.36, 0.29, 0.5)), Some(Vec3::Z), &cfg);
+        let j = estimate_joint(
+            1,
+            &body,
+            2,
+            &door,
+            &spec(JointKind::Revolute, Template::Hinge, Some(Vec3::new(0.36, 0.29, 0.5)), Some(Vec3::Z)),
+            &cfg,
+        );
         assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "{j:?}");
     }
 
@@ -443,9 +451,14 @@ mod tests {
     fn a_sliding_panel_slides_in_its_plane_towards_the_open_side() {
         let body = cabinet_body(); // front face at y = 0.25, x in [-0.4, 0.4]
         let panel = Primitive::cuboid_at(Vec3::new(-0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
-        check("sliding_door", JointKind::Prismatic);
-        check("sash", JointKind::Prismatic);
-        let j = estimate_joint(1, &body, 2, &panel, "slide", JointKind::Prismatic, None, Some(Vec3::Y), &KinematicsConfig::default());
+        let j = estimate_joint(
+            1,
+            &body,
+            2,
+            &panel,
+            &spec(JointKind::Prismatic, Template::SlidingPanel, None, Some(Vec3::Y)),
+            &KinematicsConfig::default(),
+        );
         assert!(j.axis_world.dot(Vec3::X) > 0.999, "{j:?}");
         assert!((j.upper - 0.4).abs() < 1e-4, "{j:?}");
     }

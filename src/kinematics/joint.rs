@@ -11,21 +11,40 @@ pub enum JointKind {
     Fixed,
     Prismatic,
     Revolute,
+    /// A revolute joint without limits (wheels, casters, turntables); its `lower`/`upper` are a
+    /// display range only.
+    Continuous,
 }
 
 impl JointKind {
+    pub const ALL: [JointKind; 4] = [JointKind::Fixed, JointKind::Prismatic, JointKind::Revolute, JointKind::Continuous];
+
+    /// Whether the joint turns (revolute or continuous).
+    #[must_use]
+    pub fn rotates(self) -> bool {
+        matches!(self, JointKind::Revolute | JointKind::Continuous)
+    }
+
+    /// The motion a joint allows, for comparing types across conventions: a URDF `continuous`
+    /// joint is read as revolute without limits, so a continuous and a revolute joint move alike.
+    #[must_use]
+    pub fn motion_class(self) -> JointKind {
+        if self == JointKind::Continuous { JointKind::Revolute } else { self }
+    }
+
     #[must_use]
     pub fn name(self) -> &'static str {
         match self {
             JointKind::Fixed => "fixed",
             JointKind::Prismatic => "prismatic",
             JointKind::Revolute => "revolute",
+            JointKind::Continuous => "continuous",
         }
     }
 
     #[must_use]
     pub fn from_name(name: &str) -> Option<Self> {
-        [JointKind::Fixed, JointKind::Prismatic, JointKind::Revolute].into_iter().find(|k| k.name() == name)
+        JointKind::ALL.into_iter().find(|k| k.name() == name)
     }
 
     #[must_use]

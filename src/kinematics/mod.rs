@@ -1,12 +1,14 @@
-//! Joints from part labels and geometry: type, axis, pivot and limits.
+//! Joints from part labels and geometry: the vocabulary (label → class → allowed types), the
+//! evidence that chooses a type, and the templates that fit axis, pivot and limits.
 
 mod articulate;
 mod assign;
+pub mod evidence;
 mod joint;
+pub mod vocabulary;
 
 pub use articulate::{joint_motion, part_motions};
-pub use assign::{
-    KinematicsConfig, estimate_joint, is_base_label, is_handle_label, is_movable_label, is_typical_parent, joint_from_handle,
-    joint_kind_for_label, label_tokens, outward_direction,
-};
+pub use assign::{JointSpec, KinematicsConfig, estimate_joint, joint_from_handle, outward_direction};
+pub use evidence::{Decision, JointContext, JointEvidence, decide, parent_confidence, review_order};
 pub use joint::{Joint, JointKind};
+pub use vocabulary::{PartClass, Role, Template, Vocabulary, VocabularyError, label_tokens};

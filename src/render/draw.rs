@@ -306,7 +306,7 @@ fn push_joint(out: &mut DrawData, j: &Joint, posed: &BTreeMap<PartId, Primitive>
     let emphasis = if view.selected == Some(j.child) { 1.8 } else { 1.0 };
     let rod = (0.012 * extent).clamp(0.004, 0.015) * emphasis;
     match j.kind {
-        JointKind::Revolute => {
+        JointKind::Revolute | JointKind::Continuous => {
             // The hinge line through the pivot, as long as the part along it, and a ball at the pivot.
             let centre_on_axis = origin + axis * (child.center() - origin).dot(axis);
             let half = 0.5 * child.extent_along(axis).max(0.05) + 0.03;

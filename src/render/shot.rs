@@ -44,7 +44,7 @@ pub enum ShotError {
 
 /// A scene to draw: the model, and the scan when there is one.
 enum Loaded {
-    Model(SceneModel),
+    Model(Box<SceneModel>),
     Document(Box<Document>),
 }
 
@@ -60,7 +60,7 @@ fn load(input: &Path, config: &PipelineConfig) -> Result<Loaded, ShotError> {
             Ok(Loaded::Document(Box::new(doc)))
         }
         "json" => match read_scene_json(input) {
-            Ok(model) => Ok(Loaded::Model(model)),
+            Ok(model) => Ok(Loaded::Model(Box::new(model))),
             Err(scene_err) => match Document::open_session(input, config.clone(), &Quiet) {
                 Ok(doc) => Ok(Loaded::Document(Box::new(doc))),
                 Err(session_err) => Err(ShotError::Input {
@@ -77,7 +77,7 @@ fn load(input: &Path, config: &PipelineConfig) -> Result<Loaded, ShotError> {
 pub fn render_file(input: &Path, options: &ShotOptions, config: &PipelineConfig) -> Result<(RgbaImage, String), ShotError> {
     let loaded = load(input, config)?;
     let (model, scan): (&SceneModel, Option<&Scan>) = match &loaded {
-        Loaded::Model(m) => (m, None),
+        Loaded::Model(m) => (&**m, None),
         Loaded::Document(d) => (d.model(), Some(d.scan())),
     };
     let gpu = Headless::new()?;

@@ -8,7 +8,7 @@
 //!   gets a root edge of this weight, so a bed hangs off its frame rather than its headboard when
 //!   the contact ratios alone are nearly symmetric;
 //! - `label_prior`: a contact edge from a typical parent of the child's label
-//!   ([`crate::kinematics::is_typical_parent`]: a handle's door or drawer, a headboard's frame, a
+//!   ([`crate::kinematics::Vocabulary::is_typical_parent`]: a handle's door or drawer, a headboard's frame, a
 //!   leg's top) is scaled by this factor. Contacts alone are ambiguous at the centimetre level of
 //!   fitting noise — a handle touches the body behind a 2 cm door too, a headboard touches both
 //!   the frame and the mattress end — but the part is mounted on its typical parent. The prior
@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use super::arborescence::{WeightedEdge, max_arborescence};
 use crate::contact::{ContactConfig, PairContact, contact};
-use crate::kinematics::{is_base_label, is_handle_label, is_typical_parent};
+use crate::kinematics::Vocabulary;
 use crate::model::ContactEdge;
 use crate::primitive::Primitive;
 use crate::report::Warning;
@@ -93,8 +93,8 @@ pub struct TreePart<'a> {
 /// first, then larger parts. The tree's root prior and the pipeline's co-alignment reference both
 /// use it.
 #[must_use]
-pub fn root_preference(label: &str, primitive: &Primitive) -> (bool, f32) {
-    (is_base_label(label), primitive.volume())
+pub fn root_preference(vocab: &Vocabulary, label: &str, primitive: &Primitive) -> (bool, f32) {
+    (vocab.is_base(label), primitive.volume())
 }
 
 const ROOT_WEIGHT: f64 = 1e-6;
@@ -105,7 +105,12 @@ const FORCED_WEIGHT: f64 = 1e3;
 /// child → parent edges (editor corrections); a pin naming a part outside `parts` is ignored
 /// with a warning.
 #[must_use]
-pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: &BTreeMap<PartId, PartId>) -> (PartTree, Vec<Warning>) {
+pub fn build_part_tree(
+    parts: &[TreePart<'_>],
+    cfg: &TreeConfig,
+    vocab: &Vocabulary,
+    forced_parent: &BTreeMap<PartId, PartId>,
+) -> (PartTree, Vec<Warning>) {
     let mut warnings = Vec::new();
     let n = parts.len();
     if n == 0 {
@@ -127,8 +132,8 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
     // Root preference: base labels first, then volume (rank keeps weights tiny and ordered).
     let mut by_pref: Vec<usize> = (0..n).collect();
     by_pref.sort_by(|&a, &b| {
-        let ka = root_preference(parts[a].label, parts[a].primitive);
-        let kb = root_preference(parts[b].label, parts[b].primitive);
+        let ka = root_preference(vocab, parts[a].label, parts[a].primitive);
+        let kb = root_preference(vocab, parts[b].label, parts[b].primitive);
         ka.partial_cmp(&kb).unwrap_or(std::cmp::Ordering::Equal).then(parts[b].id.cmp(&parts[a].id))
     });
     let mut edges = Vec::new();
@@ -163,8 +168,8 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
                 continue;
             }
             let weight = match contacts.get(&(p.id, c.id)) {
-                Some(pc) if is_typical_parent(c.label, p.label) => f64::from(pc.weight * cfg.label_prior),
-                Some(pc) if grip_touches_a_part_set_into(c, p, parts, &contacts, cfg.contact.dist_max_m) => {
+                Some(pc) if vocab.is_typical_parent(c.label, p.label) => f64::from(pc.weight * cfg.label_prior),
+                Some(pc) if vocab.is_grip(c.label) && grip_touches_a_part_set_into(c, p, parts, &contacts, cfg.contact.dist_max_m) => {
                     f64::from(pc.weight / cfg.label_prior.max(1.0))
                 }
                 Some(pc) => f64::from(pc.weight),
@@ -172,7 +177,7 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
                 // nearest within each group (weights in (1, 2] and (0, 1] × FALLBACK_WEIGHT).
                 None => {
                     let nearness = 1.0 / (1.0 + f64::from(primitive_gap(p.primitive, c.primitive)));
-                    let typical = if is_typical_parent(c.label, p.label) { 1.0 } else { 0.0 };
+                    let typical = if vocab.is_typical_parent(c.label, p.label) { 1.0 } else { 0.0 };
                     FALLBACK_WEIGHT * (typical + nearness)
                 }
             };
@@ -216,7 +221,7 @@ pub fn build_part_tree(parts: &[TreePart<'_>], cfg: &TreeConfig, forced_parent: 
     (PartTree { root, parent, edges: tree_edges, contacts }, warnings)
 }
 
-/// Whether `grip` (a handle-labelled part) also touches another part whose box lies inside
+/// Whether `grip` (a grip-labelled part) also touches another part whose box lies inside
 /// `outer`'s box: then it is mounted on that inner part rather than on `outer` (module docs).
 fn grip_touches_a_part_set_into(
     grip: &TreePart<'_>,
@@ -225,13 +230,12 @@ fn grip_touches_a_part_set_into(
     contacts: &BTreeMap<(PartId, PartId), PairContact>,
     margin_m: f32,
 ) -> bool {
-    is_handle_label(grip.label)
-        && parts.iter().any(|q| {
-            q.id != grip.id
-                && q.id != outer.id
-                && contacts.contains_key(&(q.id, grip.id))
-                && lies_within(q.primitive, outer.primitive, margin_m)
-        })
+    parts.iter().any(|q| {
+        q.id != grip.id
+            && q.id != outer.id
+            && contacts.contains_key(&(q.id, grip.id))
+            && lies_within(q.primitive, outer.primitive, margin_m)
+    })
 }
 
 /// Whether every corner of `inner`'s box lies inside `outer`'s box grown by `margin_m`.
@@ -267,7 +271,7 @@ mod tests {
     fn table_legs_hang_off_the_top() {
         let parts = table();
         let view: Vec<TreePart> = parts.iter().map(|(id, l, p)| TreePart { id: *id, label: l, primitive: p }).collect();
-        let (tree, warnings) = build_part_tree(&view, &TreeConfig::default(), &BTreeMap::new());
+        let (tree, warnings) = build_part_tree(&view, &TreeConfig::default(), &Vocabulary::builtin(), &BTreeMap::new());
         assert!(warnings.is_empty(), "{warnings:?}");
         assert_eq!(tree.root, 1);
         for leg in 2..=5 {
@@ -282,7 +286,7 @@ mod tests {
         parts.push((9, "handle", Primitive::cuboid_at(Vec3::new(3.0, 0.0, 0.5), Vec3::splat(0.05))));
         let view: Vec<TreePart> = parts.iter().map(|(id, l, p)| TreePart { id: *id, label: l, primitive: p }).collect();
         let pins = BTreeMap::from([(3, 2)]);
-        let (tree, warnings) = build_part_tree(&view, &TreeConfig::default(), &pins);
+        let (tree, warnings) = build_part_tree(&view, &TreeConfig::default(), &Vocabulary::builtin(), &pins);
         assert_eq!(tree.parent.get(&3), Some(&2));
         assert!(tree.parent.contains_key(&9));
         assert!(warnings.iter().any(|w| w.subject == "part 9"), "{warnings:?}");
@@ -301,7 +305,7 @@ mod tests {
             TreePart { id: 2, label: "top", primitive: &drawer },
             TreePart { id: 3, label: "handle", primitive: &handle },
         ];
-        let (tree, _) = build_part_tree(&view, &TreeConfig::default(), &BTreeMap::new());
+        let (tree, _) = build_part_tree(&view, &TreeConfig::default(), &Vocabulary::builtin(), &BTreeMap::new());
         assert_eq!(tree.parent.get(&3), Some(&2), "{:?}", tree.parent);
         assert_eq!(tree.parent.get(&2), Some(&1), "{:?}", tree.parent);
         // A part that is not a grip keeps its contact weights (the drawer itself, under the body).
@@ -320,7 +324,7 @@ mod tests {
             TreePart { id: 2, label: "mattress", primitive: &mattress },
             TreePart { id: 3, label: "headboard", primitive: &headboard },
         ];
-        let (tree, warnings) = build_part_tree(&view, &TreeConfig::default(), &BTreeMap::new());
+        let (tree, warnings) = build_part_tree(&view, &TreeConfig::default(), &Vocabulary::builtin(), &BTreeMap::new());
         assert_eq!(tree.parent.get(&3), Some(&1), "{:?}", tree.parent);
         assert!(warnings.iter().any(|w| w.subject == "part 3"), "reported: {warnings:?}");
     }
