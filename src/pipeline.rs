@@ -415,40 +415,32 @@ fn make_joint(
         let joint = Joint { parent, child, kind: JointKind::Fixed, axis_world: Vec3::X, origin_world: Vec3::ZERO, lower: 0.0, upper: 0.0 };
         return (joint, JointEvidence { child, label_rule: "a part without geometry: fixed".into(), ..JointEvidence::default() });
     };
-    let object_parts: Vec<(&Primitive, &str)> = tree
-        .contacts
-        .keys()
-        .flat_map(|&(a, b)| [a, b])
+    // Every part of the object is the root or has a parent in its tree.
+    let object_parts: Vec<(&Primitive, &str)> = std::iter::once(tree.root)
         .chain(tree.parent.keys().copied())
-        .collect::<std::collections::BTreeSet<PartId>>()
-        .into_iter()
         .filter(|&id| id != child && id != parent)
         .filter_map(|id| Some((prims.get(&id)?, labels.get(&id).copied().unwrap_or(""))))
         .collect();
-    // The parent face the child is mounted on (same face index on the refined primitive).
-    let contact_normal =
-        tree.contacts.get(&(parent, child)).and_then(|c| crate::contact::surface_planes(pp).get(c.parent_face).map(|f| f.normal));
-    let ctx = JointContext {
-        label,
-        parent: pp,
-        parent_label: labels.get(&parent).copied().unwrap_or(""),
-        child: cp,
-        grip: mounted(true),
-        mount_normal: contact_normal,
-        others: object_parts,
-    };
+    let ctx = JointContext { label, parent: pp, child: cp, grip: mounted(true), others: object_parts };
     let mut decision = decide(vocab, &ctx);
     decision.evidence.child = child;
     if let Some(&pinned) = edits.joint_kind.get(&child) {
         decision.kind = pinned;
-        decision.template = vocab.classify(label).map_or(Template::default_for(pinned), |m| m.class.template(pinned));
+        decision.evidence.template = vocab.classify(label).map_or(Template::default_for(pinned), |m| m.class.template(pinned));
         decision.evidence.tests.push(format!("type pinned by a person: {}", pinned.name()));
         decision.evidence.type_confidence = CONF_PINNED;
-        decision.evidence.template = format!("{:?}", decision.template);
     }
-    let mount_normal = decision.front.or(contact_normal);
-    let spec =
-        JointSpec { kind: decision.kind, template: decision.template, handle: mounted(false), mount_normal, axis_line: decision.axis_line };
+    // The parent face the child is mounted on (same face index on the refined primitive).
+    let mount_normal = decision.front.or_else(|| {
+        tree.contacts.get(&(parent, child)).and_then(|c| crate::contact::surface_planes(pp).get(c.parent_face).map(|f| f.normal))
+    });
+    let spec = JointSpec {
+        kind: decision.kind,
+        template: decision.evidence.template,
+        handle: mounted(false),
+        mount_normal,
+        axis_line: decision.axis_line,
+    };
     let mut joint = estimate_joint(parent, pp, child, cp, &spec, &cfg.kinematics);
     if let Some(axis) = edits.axis.get(&child) {
         joint.axis_world = axis.normalize_or(joint.axis_world);

@@ -121,40 +121,37 @@ fn parse_obj(bytes: &[u8]) -> Result<TriMesh, String> {
 /// the file; negative ones count back from the elements declared so far, as the format says.
 fn check_obj_face_indices(bytes: &[u8]) -> Result<(), String> {
     const KINDS: [&str; 3] = ["positions", "texture coordinates", "normals"];
+    // Which element a line declares: 0 position, 1 texture coordinate, 2 normal.
+    let element = |keyword: Option<&str>| match keyword {
+        Some("v") => Some(0),
+        Some("vt") => Some(1),
+        Some("vn") => Some(2),
+        _ => None,
+    };
     let text = String::from_utf8_lossy(bytes);
     let mut total = [0_i64; 3];
-    for line in text.lines() {
-        match line.split_whitespace().next() {
-            Some("v") => total[0] += 1,
-            Some("vt") => total[1] += 1,
-            Some("vn") => total[2] += 1,
-            _ => {}
-        }
+    for k in text.lines().filter_map(|line| element(line.split_whitespace().next())) {
+        total[k] += 1;
     }
     let mut so_far = [0_i64; 3];
     for (number, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => so_far[0] += 1,
-            Some("vt") => so_far[1] += 1,
-            Some("vn") => so_far[2] += 1,
-            Some("f") => {
-                for corner in words {
-                    for (k, index) in corner.split('/').enumerate().take(3) {
-                        let Ok(i) = index.parse::<i64>() else { continue }; // empty or malformed: tobj reports it
-                        let fits = if i > 0 { i <= total[k] } else { i < 0 && i.checked_neg().is_some_and(|n| n <= so_far[k]) };
-                        if !fits {
-                            return Err(format!(
-                                "OBJ line {}: face index {i} outside the {} {} declared",
-                                number + 1,
-                                if i > 0 { total[k] } else { so_far[k] },
-                                KINDS[k]
-                            ));
-                        }
-                    }
+        let keyword = words.next();
+        if let Some(k) = element(keyword) {
+            so_far[k] += 1;
+        }
+        if keyword != Some("f") {
+            continue;
+        }
+        for corner in words {
+            for (k, index) in corner.split('/').enumerate().take(3) {
+                let Ok(i) = index.parse::<i64>() else { continue }; // empty or malformed: tobj reports it
+                let fits = if i > 0 { i <= total[k] } else { i < 0 && i.checked_neg().is_some_and(|n| n <= so_far[k]) };
+                if !fits {
+                    let declared = if i > 0 { total[k] } else { so_far[k] };
+                    return Err(format!("OBJ line {}: face index {i} outside the {declared} {} declared", number + 1, KINDS[k]));
                 }
             }
-            _ => {}
         }
     }
     Ok(())

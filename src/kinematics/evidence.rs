@@ -63,8 +63,8 @@ pub struct JointEvidence {
     pub label_rule: String,
     /// The geometric tests that were run and what they found.
     pub tests: Vec<String>,
-    /// How the axis, pivot and limits were fitted (the template).
-    pub template: String,
+    /// How the axis, pivot and limits are fitted.
+    pub template: Template,
     /// Why this parent: its contact weight against the next candidate's.
     pub parent_rule: String,
     /// The second-best type, when another type was possible.
@@ -81,21 +81,17 @@ pub struct JointEvidence {
 pub struct JointContext<'a> {
     pub label: &'a str,
     pub parent: &'a Primitive,
-    pub parent_label: &'a str,
     pub child: &'a Primitive,
     /// Centre of a grip mounted on the child, if any.
     pub grip: Option<Vec3>,
-    /// The outward normal of the parent face the child is mounted on, from the contact test.
-    pub mount_normal: Option<Vec3>,
     /// The other parts of the object (not the parent, not the child) with their labels.
     pub others: Vec<(&'a Primitive, &'a str)>,
 }
 
-/// The chosen type and template, with the evidence.
+/// The chosen type, with the evidence (which holds the template).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Decision {
     pub kind: JointKind,
-    pub template: Template,
     /// A front normal found by a test, used as the mount normal.
     pub front: Option<Vec3>,
     /// Axis and a point on it, when a test fixes them (swing handles, lift-off lids).
@@ -130,7 +126,6 @@ fn decide_by_class(vocab: &Vocabulary, m: &LabelMatch<'_>, ctx: &JointContext<'_
     let mut kind = class.default_joint();
     let mut type_conf = CONF_LABEL_ONLY_TYPE;
     let mut axis_line = None;
-    let mut template = None;
     if let Some(k) = m.allowed_motion() {
         kind = k;
     } else if class.joints.len() > 1 {
@@ -138,9 +133,8 @@ fn decide_by_class(vocab: &Vocabulary, m: &LabelMatch<'_>, ctx: &JointContext<'_
         for test in &class.tests {
             let (found, note) = run_test(*test, vocab, ctx);
             evidence.tests.push(note);
-            if let Some((k, t, line)) = found.filter(|(k, _, _)| class.allows(*k)) {
+            if let Some((k, line)) = found.filter(|(k, _)| class.allows(*k)) {
                 kind = k;
-                template = t;
                 axis_line = line;
                 break;
             }
@@ -153,63 +147,51 @@ fn decide_by_class(vocab: &Vocabulary, m: &LabelMatch<'_>, ctx: &JointContext<'_
     if kind == JointKind::Fixed
         && class.role != Role::Grip
         && m.allowed_motion().is_none()
-        && let Some((k, front)) = ctx.grip.and_then(|h| joint_from_handle(ctx.parent, ctx.child, h))
+        && let Some(d) = moved_by_grip(ctx, &mut evidence, CONF_LABEL_OVERRIDDEN, ", though the label names a rigid part")
     {
-        let template = if k == JointKind::Prismatic { Template::Drawer } else { Template::Hinge };
-        evidence.tests.push(format!(
-            "grip-mounted: a grip at its front moves it as a {}, though the label names a rigid part",
-            template_noun(template)
-        ));
-        evidence.runner_up = Some(JointKind::Fixed);
-        evidence.type_confidence = CONF_LABEL_OVERRIDDEN;
-        evidence.template = format!("{template:?}");
-        return Decision { kind: k, template, front: Some(front), axis_line: None, evidence };
+        return d;
     }
-    let template = template.unwrap_or_else(|| class.template(kind));
-    evidence.template = format!("{template:?}");
-    Decision { kind, template, front: None, axis_line, evidence }
+    evidence.template = class.template(kind);
+    Decision { kind, front: None, axis_line, evidence }
+}
+
+/// A grip at the child's front (a drawer or a door, [`joint_from_handle`]): the decision, with
+/// the test noted in `evidence` and `confidence` as its type confidence; `None` when there is no
+/// grip or it is not at the parent's front.
+fn moved_by_grip(ctx: &JointContext<'_>, evidence: &mut JointEvidence, confidence: f32, note: &str) -> Option<Decision> {
+    let (kind, front) = joint_from_handle(ctx.parent, ctx.child, ctx.grip?)?;
+    let (template, noun) = if kind == JointKind::Prismatic { (Template::Drawer, "drawer") } else { (Template::Hinge, "door") };
+    evidence.tests.push(format!("grip-mounted: a grip at its front moves it as a {noun}{note}"));
+    evidence.runner_up = Some(JointKind::Fixed);
+    evidence.type_confidence = confidence;
+    evidence.template = template;
+    Some(Decision { kind, front: Some(front), axis_line: None, evidence: std::mem::take(evidence) })
 }
 
 fn decide_by_geometry(ctx: &JointContext<'_>) -> Decision {
     let mut evidence =
         JointEvidence { label_rule: format!("label `{}` names no class: geometry alone", ctx.label), ..JointEvidence::default() };
-    if let Some(h) = ctx.grip {
-        if let Some((kind, front)) = joint_from_handle(ctx.parent, ctx.child, h) {
-            let template = if kind == JointKind::Prismatic { Template::Drawer } else { Template::Hinge };
-            evidence.tests.push(format!("grip-mounted: a grip at its front makes it a {}", template_noun(template)));
-            evidence.type_confidence = CONF_GRIP_GEOMETRY;
-            evidence.runner_up = Some(JointKind::Fixed);
-            evidence.template = format!("{template:?}");
-            return Decision { kind, template, front: Some(front), axis_line: None, evidence };
-        }
+    if let Some(d) = moved_by_grip(ctx, &mut evidence, CONF_GRIP_GEOMETRY, "") {
+        return d;
+    }
+    if ctx.grip.is_some() {
         evidence.tests.push("grip-mounted: a grip, but not at the parent's front".into());
     }
     if let Some(axis) = spinning_disc_axis(ctx.child) {
         evidence.tests.push("spinning disc: a round disc on a horizontal axis".into());
         evidence.type_confidence = CONF_DISC_GEOMETRY;
         evidence.runner_up = Some(JointKind::Fixed);
-        evidence.template = format!("{:?}", Template::Spin);
-        return Decision {
-            kind: JointKind::Continuous,
-            template: Template::Spin,
-            front: None,
-            axis_line: Some((axis, ctx.child.center())),
-            evidence,
-        };
+        evidence.template = Template::Spin;
+        return Decision { kind: JointKind::Continuous, front: None, axis_line: Some((axis, ctx.child.center())), evidence };
     }
     evidence.tests.push("no grip, not a disc: rigid".into());
     evidence.type_confidence = CONF_UNKNOWN_RIGID;
-    evidence.template = format!("{:?}", Template::Fixed);
-    Decision { kind: JointKind::Fixed, template: Template::Fixed, front: None, axis_line: None, evidence }
-}
-
-fn template_noun(t: Template) -> &'static str {
-    if t == Template::Drawer { "drawer" } else { "door" }
+    evidence.template = Template::Fixed;
+    Decision { kind: JointKind::Fixed, front: None, axis_line: None, evidence }
 }
 
 /// Runs one geometric test: the type it supports (with an axis line when it fixes one) and a note.
-/// The template is the class's for that type unless the test names one.
-type TestOutcome = (Option<(JointKind, Option<Template>, Option<(Vec3, Vec3)>)>, String);
+type TestOutcome = (Option<(JointKind, Option<(Vec3, Vec3)>)>, String);
 
 fn run_test(test: GeometryTest, vocab: &Vocabulary, ctx: &JointContext<'_>) -> TestOutcome {
     match test {
@@ -217,7 +199,7 @@ fn run_test(test: GeometryTest, vocab: &Vocabulary, ctx: &JointContext<'_>) -> T
             let panels: Vec<&Primitive> = ctx.others.iter().filter(|(_, label)| !vocab.is_base(label)).map(|(p, _)| *p).collect();
             match overlapping_parallel_panel(ctx.child, &panels) {
                 Some(offset) => (
-                    Some((JointKind::Prismatic, None, None)),
+                    Some((JointKind::Prismatic, None)),
                     format!("sliding panel: a parallel panel overlaps it {:.0} mm behind or in front: slides", offset * 1e3),
                 ),
                 None => (None, "sliding panel: no overlapping parallel panel in a second plane".into()),
@@ -225,16 +207,15 @@ fn run_test(test: GeometryTest, vocab: &Vocabulary, ctx: &JointContext<'_>) -> T
         }
         GeometryTest::LiftOff => match lift_axis(ctx.parent, ctx.child) {
             Some(axis) => (
-                Some((JointKind::Prismatic, None, Some((axis, ctx.child.center())))),
+                Some((JointKind::Prismatic, Some((axis, ctx.child.center())))),
                 "lift-off: a round lid centred on a round body: lifts along the body's axis".into(),
             ),
             None => (None, "lift-off: not a round lid centred on a round body".into()),
         },
         GeometryTest::SwingHandle => match swing_line(ctx.parent, ctx.child) {
-            Some(line) => (
-                Some((JointKind::Revolute, None, Some(line))),
-                "swing handle: spans the round body across its axis: swings on its ends".into(),
-            ),
+            Some(line) => {
+                (Some((JointKind::Revolute, Some(line))), "swing handle: spans the round body across its axis: swings on its ends".into())
+            }
             None => (None, "swing handle: does not span a round body".into()),
         },
     }
@@ -358,14 +339,6 @@ pub fn parent_confidence(chosen_weight: Option<f32>, runner_up_weight: Option<f3
     0.5 + 0.5 * margin
 }
 
-/// Sorts joints by confidence, least certain first (ties by child id): the review queue.
-#[must_use]
-pub fn review_order(evidence: &[JointEvidence]) -> Vec<PartId> {
-    let mut order: Vec<(f32, PartId)> = evidence.iter().map(|e| (e.confidence, e.child)).collect();
-    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    order.into_iter().map(|(_, c)| c).collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -376,13 +349,13 @@ mod tests {
     }
 
     fn ctx<'a>(label: &'a str, parent: &'a Primitive, child: &'a Primitive, others: Vec<(&'a Primitive, &'a str)>) -> JointContext<'a> {
-        JointContext { label, parent, parent_label: "body", child, grip: None, mount_normal: None, others }
+        JointContext { label, parent, child, grip: None, others }
     }
 
     /// The type and template a part gets.
     fn check(c: &JointContext<'_>, expected: (JointKind, Template)) {
         let d = decide(&Vocabulary::builtin(), c);
-        assert_eq!((d.kind, d.template), expected, "{:?}", d.evidence);
+        assert_eq!((d.kind, d.evidence.template), expected, "{:?}", d.evidence);
     }
 
     #[test]
@@ -434,7 +407,5 @@ mod tests {
         assert!((parent_confidence(Some(1.0), Some(0.5), false) - 0.75).abs() < 1e-6);
         assert!((parent_confidence(None, None, false) - CONF_NO_CONTACT_PARENT).abs() < 1e-6);
         assert!((parent_confidence(Some(0.2), Some(0.9), true) - 1.0).abs() < 1e-6);
-        let ev = |child, confidence| JointEvidence { child, confidence, ..JointEvidence::default() };
-        assert_eq!(review_order(&[ev(3, 0.9), ev(1, 0.5), ev(2, 0.5)]), vec![1, 2, 3]);
     }
 }

@@ -9,6 +9,6 @@ pub mod vocabulary;
 
 pub use articulate::{joint_motion, part_motions};
 pub use assign::{JointSpec, KinematicsConfig, estimate_joint, joint_from_handle, outward_direction};
-pub use evidence::{Decision, JointContext, JointEvidence, decide, parent_confidence, review_order};
+pub use evidence::{Decision, JointContext, JointEvidence, decide, parent_confidence};
 pub use joint::{Joint, JointKind};
 pub use vocabulary::{PartClass, Role, Template, Vocabulary, VocabularyError, label_tokens};

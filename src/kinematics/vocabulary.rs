@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::{Arc, OnceLock};
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::joint::JointKind;
@@ -56,10 +56,11 @@ pub enum GeometryTest {
 }
 
 /// How a joint type is fitted to the geometry of a part ([`super::assign::estimate_joint`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Template {
     /// Rigid.
+    #[default]
     Fixed,
     /// Slides out of the parent's front face.
     Drawer,
@@ -202,10 +203,14 @@ impl Vocabulary {
 
     /// Parses vocabulary TOML; `source_name` names it in errors.
     pub fn parse(text: &str, source_name: &str) -> Result<Self, VocabularyError> {
-        let vocab: Vocabulary =
-            toml::from_str(text).map_err(|e| VocabularyError::Parse { source_name: source_name.to_owned(), message: e.to_string() })?;
-        vocab.validate(source_name, None)?;
+        let vocab = Self::deserialize(text, source_name)?;
+        vocab.validate(source_name)?;
         Ok(vocab)
+    }
+
+    /// The TOML as it stands, not yet validated (an extension may name classes of the base).
+    fn deserialize(text: &str, source_name: &str) -> Result<Self, VocabularyError> {
+        toml::from_str(text).map_err(|e| VocabularyError::Parse { source_name: source_name.to_owned(), message: e.to_string() })
     }
 
     /// Reads a vocabulary file and lays it over `self`: classes of the same name are replaced,
@@ -215,10 +220,8 @@ impl Vocabulary {
         let name = path.display().to_string();
         let text =
             String::from_utf8(bytes).map_err(|_| VocabularyError::Parse { source_name: name.clone(), message: "not UTF-8 text".into() })?;
-        let extra: Vocabulary =
-            toml::from_str(&text).map_err(|e| VocabularyError::Parse { source_name: name.clone(), message: e.to_string() })?;
-        let merged = self.extended_with(extra);
-        merged.validate(&name, Some(self))?;
+        let merged = self.extended_with(Self::deserialize(&text, &name)?);
+        merged.validate(&name)?;
         Ok(merged)
     }
 
@@ -240,7 +243,7 @@ impl Vocabulary {
         Self { motion_words, classes }
     }
 
-    fn validate(&self, source_name: &str, _base: Option<&Vocabulary>) -> Result<(), VocabularyError> {
+    fn validate(&self, source_name: &str) -> Result<(), VocabularyError> {
         let class_err =
             |class: &str, message: String| VocabularyError::Class { source_name: source_name.to_owned(), class: class.to_owned(), message };
         let mut seen = std::collections::BTreeSet::new();
@@ -357,12 +360,6 @@ impl Vocabulary {
     #[must_use]
     pub fn is_grip(&self, label: &str) -> bool {
         self.role(label) == Some(Role::Grip)
-    }
-
-    /// A part that moves relative to its parent (not a grip).
-    #[must_use]
-    pub fn is_movable(&self, label: &str) -> bool {
-        self.role(label) == Some(Role::Movable)
     }
 
     /// The joint type a label alone calls for: its motion word when its class allows it, else
