@@ -19,7 +19,7 @@ use glam::DVec3;
 
 use super::effects::{Effect, EffectKind};
 use super::model::{DofKind, GapModel};
-use super::smooth::local_cubic;
+use super::smooth::{GAUSS_HALF_GAIN_F_SIGMA, GAUSS_SUPPORT_SIGMAS, Smoother, local_cubic};
 use crate::dynamics::MultiBody;
 use crate::linalg::solve_spd;
 
@@ -32,8 +32,9 @@ pub struct SelectionRules {
     pub min_cv_gain: f64,
     /// Share of the folds in which the term must lower the held-out error.
     pub min_fold_share: f64,
-    /// RMS effort of a term over the motion, as a share of the joint's own RMS effort, below
-    /// which it is "physically nothing" and not reported.
+    /// RMS effort of a term over the motion, as a share of the joint's own dynamic RMS effort
+    /// (beyond holding it still against gravity), below which it is "physically nothing" and
+    /// not reported.
     pub min_effort_share: f64,
     /// Residual RMS (share of the joint's own RMS effort) left after the best model above which
     /// `unknown` is reported.
@@ -46,7 +47,7 @@ pub struct SelectionRules {
     /// not reported as a heavier part.
     pub mass_scale_range: (f64, f64),
     /// Half-width of the first, wide smoothing pass that measures the motion's frequency, s (the
-    /// window used is then chosen from it, [`smoothing_half_width`]).
+    /// window used is then chosen from it, [`bandwidth`]).
     pub smoothing_half_width_s: f64,
 }
 
@@ -70,91 +71,143 @@ impl Default for SelectionRules {
 pub struct Signals {
     /// Sample times, s.
     pub time_s: Vec<f64>,
-    /// Position, velocity, acceleration per dof and sample.
+    /// Position, velocity, acceleration per dof and sample, smoothed (the motion's description).
     pub q: Vec<Vec<[f64; 3]>>,
-    /// Smoothed measured effort per dof (None without an effort column).
+    /// Position, velocity, acceleration per dof and sample, differentiated by a narrow window
+    /// only (the terms of the equation of motion are evaluated on these, then filtered).
+    pub raw: Vec<Vec<[f64; 3]>>,
+    /// The wide filter applied to every term and to the efforts.
+    pub filter: Smoother,
+    /// Measured effort per dof smoothed like `q`, for judging sizes (None without a column).
+    pub effort_size: Vec<Option<Vec<f64>>>,
+    /// Filtered measured effort per dof (None without an effort column).
     pub effort: Vec<Option<Vec<f64>>>,
     /// Whether sample i can be used: every signal finite, not within a window of either end.
     pub usable: Vec<bool>,
-    /// The smoothing half-width used, s.
-    pub half_width_s: f64,
+    /// The bandwidths used.
+    pub band: Bandwidth,
 }
 
 /// Widest smoothing half-width, s.
 const MAX_HALF_WIDTH_S: f64 = 0.15;
 
-/// Cut-off of the smoothing as a multiple of the motion's dominant frequency.
+/// Cut-off of the description smoothing (the local cubic of the positions) as a multiple of the
+/// motion's dominant frequency.
 const CUTOFF_OVER_MOTION: f64 = 5.0;
 
-/// The smoothing window for these positions: a cubic's cut-off at [`CUTOFF_OVER_MOTION`] × the
-/// fastest joint's dominant frequency (RMS speed over RMS excursion, from a first wide pass), so
-/// that the acceleration keeps the motion and loses the encoder noise. Schafer's rule for
-/// Savitzky–Golay filters: `f_c / f_Nyquist ≈ (order + 1) / (3.2 M − 4.6)`, M the half-width in
-/// samples. Between 3 samples and [`MAX_HALF_WIDTH_S`].
-#[must_use]
-pub fn smoothing_half_width(time_s: &[f64], positions: &[Vec<f64>], first_pass_s: f64) -> f64 {
-    let n = time_s.len();
-    if n < 3 {
-        return first_pass_s;
+/// Widest Gaussian σ of the parallel filter, s.
+const MAX_SIGMA_S: f64 = 0.1;
+
+/// The bandwidths chosen for a recording, from the motion they describe.
+#[derive(Debug, Clone, Copy)]
+pub struct Bandwidth {
+    /// Dominant frequency of the fastest joint's motion, Hz (0 when it does not move).
+    pub motion_hz: f64,
+    /// Half-width of the local cubic that smooths the positions for their description, s.
+    pub half_width_s: f64,
+    /// σ of the Gaussian parallel filter of the equation of motion, s.
+    pub sigma_s: f64,
+    /// Half-width of the differentiator of the raw positions, s.
+    pub narrow_s: f64,
+}
+
+impl Bandwidth {
+    /// Time on either side of a sample that its filtered terms draw on.
+    #[must_use]
+    pub fn support_s(&self) -> f64 {
+        (GAUSS_SUPPORT_SIGMAS * self.sigma_s).max(self.half_width_s) + self.narrow_s
     }
-    let dt = (time_s[n - 1] - time_s[0]) / (n - 1) as f64;
+}
+
+/// The bandwidths for these positions: the motion's dominant frequency (RMS speed over RMS
+/// excursion, and RMS acceleration over RMS speed, from a first wide pass of `first_pass_s`;
+/// the larger, the fastest joint), then the description smoothing at [`CUTOFF_OVER_MOTION`] ×
+/// that frequency (Schafer's rule for Savitzky–Golay filters, `f_c / f_Nyquist ≈ (order + 1) /
+/// (3.2 M − 4.6)`, M the half-width in samples; between 3 samples and [`MAX_HALF_WIDTH_S`]) and
+/// the parallel filter's half-gain at `cutoff_over_motion` × it (σ between 1.5 samples and
+/// [`MAX_SIGMA_S`]). Attenuating the motion band costs nothing (both sides of the equation pass
+/// the filter); what lies well above the motion is where a real mechanism may stop being the
+/// model.
+#[must_use]
+pub fn bandwidth(time_s: &[f64], positions: &[Vec<f64>], first_pass_s: f64, cutoff_over_motion: f64) -> Bandwidth {
+    let n = time_s.len();
+    let dt = if n > 1 { ((time_s[n - 1] - time_s[0]) / (n - 1) as f64).max(1e-9) } else { 0.01 };
+    let narrow_s = DIFFERENTIATOR_SAMPLES * dt;
     let mut f_motion: f64 = 0.0;
-    for y in positions {
-        let s = local_cubic(time_s, y, first_pass_s);
-        let q: Vec<f64> = s.iter().map(|x| x[0]).filter(|v| v.is_finite()).collect();
-        let mean = q.iter().sum::<f64>() / q.len().max(1) as f64;
-        let q_rms = rms(q.iter().map(|v| v - mean));
-        let v_rms = rms(s.iter().map(|x| x[1]));
-        let a_rms = rms(s.iter().map(|x| x[2]));
-        // Two estimates of the angular frequency; the larger keeps fast swings of a motion with
-        // a large excursion (a swing-up) unattenuated.
-        if q_rms > 1e-9 {
-            f_motion = f_motion.max(v_rms / (std::f64::consts::TAU * q_rms));
-        }
-        if v_rms > 1e-9 {
-            f_motion = f_motion.max(a_rms / (std::f64::consts::TAU * v_rms));
+    if n >= 3 {
+        for y in positions {
+            let s = local_cubic(time_s, y, first_pass_s);
+            let q: Vec<f64> = s.iter().map(|x| x[0]).filter(|v| v.is_finite()).collect();
+            let mean = q.iter().sum::<f64>() / q.len().max(1) as f64;
+            let q_rms = rms(q.iter().map(|v| v - mean));
+            let v_rms = rms(s.iter().map(|x| x[1]));
+            let a_rms = rms(s.iter().map(|x| x[2]));
+            // Two estimates of the angular frequency; the larger keeps fast swings of a motion
+            // with a large excursion (a swing-up) unattenuated.
+            if q_rms > 1e-9 {
+                f_motion = f_motion.max(v_rms / (std::f64::consts::TAU * q_rms));
+            }
+            if v_rms > 1e-9 {
+                f_motion = f_motion.max(a_rms / (std::f64::consts::TAU * v_rms));
+            }
         }
     }
     if f_motion <= 0.0 {
-        return first_pass_s;
+        return Bandwidth { motion_hz: 0.0, half_width_s: first_pass_s, sigma_s: (first_pass_s / 2.0).max(1.5 * dt), narrow_s };
     }
-    let f_nyquist = 0.5 / dt.max(1e-9);
+    let f_nyquist = 0.5 / dt;
     let f_cut = (CUTOFF_OVER_MOTION * f_motion).min(0.5 * f_nyquist);
     let half_samples = (4.0 * f_nyquist / f_cut + 4.6) / 3.2;
-    (half_samples * dt).clamp(3.0 * dt, MAX_HALF_WIDTH_S.max(3.0 * dt))
+    let half_width_s = (half_samples * dt).clamp(3.0 * dt, MAX_HALF_WIDTH_S.max(3.0 * dt));
+    let f_equation = (cutoff_over_motion * f_motion).min(0.5 * f_nyquist);
+    let sigma_s = (GAUSS_HALF_GAIN_F_SIGMA / f_equation).clamp(1.5 * dt, MAX_SIGMA_S.max(1.5 * dt));
+    Bandwidth { motion_hz: f_motion, half_width_s, sigma_s, narrow_s }
 }
 
-/// Half-width of the second, narrow stage that differentiates the smoothed positions, in samples.
+/// Half-width of the differentiator of the raw positions, in samples.
 const DIFFERENTIATOR_SAMPLES: f64 = 3.0;
 
-/// Smooths every dof's position and every recorded effort with the same filter, then
-/// differentiates the smoothed positions. Two stages keep the two sides of the equation of motion
-/// consistent: a local cubic's own derivative coefficients are not the derivative of its smoothed
-/// values, so the smoothed effort would not match the smoothed acceleration where the motion has
-/// kinks (a push starting). Stage one smooths values (positions and efforts alike, a linear
-/// filter K); stage two, a narrow local cubic, takes the derivatives of K∗q and is applied to K∗τ
-/// too. Efforts hold until the next sample (spec §2), so an effort sample counts at the middle
-/// of its hold.
+/// The signals of the equation of motion, filtered in parallel (Gautier's IDIM practice): the
+/// positions are differentiated by a narrow local cubic, every term of the equation (the model's
+/// effort, each effect's regressor column) is evaluated sample by sample from those, and then
+/// each term and the measured effort pass the same wide linear filter ([`Signals::filter`]).
+/// Filtering the terms instead of the positions keeps the two sides consistent where the terms
+/// are nonlinear in the motion: a Coulomb step at a reversal, `M(q) q̈` of a chain whose inertia
+/// changes with its shape, `sin q` of gravity over a large swing. (Smoothing q first and then
+/// evaluating the terms makes `K∗sign(q̇)` ≠ `sign(K∗q̇)`: on a real double pendulum the difference
+/// was a third of its efforts.) For the linear terms both orders give the same result.
+///
+/// `q` keeps the widely smoothed positions and their derivatives, for what describes the motion
+/// (its speed, its range, where it rests). Efforts hold until the next sample (spec §2), so an
+/// effort sample counts at the middle of its hold.
 #[must_use]
-pub fn signals(time_s: &[f64], positions: &[Vec<f64>], efforts: &[Option<Vec<f64>>], half_width_s: f64) -> Signals {
+pub fn signals(time_s: &[f64], positions: &[Vec<f64>], efforts: &[Option<Vec<f64>>], band: &Bandwidth) -> Signals {
     let n = time_s.len();
-    let dt = if n > 1 { (time_s[n - 1] - time_s[0]) / (n - 1) as f64 } else { 0.01 };
-    let narrow = DIFFERENTIATOR_SAMPLES * dt;
-    let values = |t: &[f64], y: &[f64]| -> Vec<f64> { local_cubic(t, y, half_width_s).into_iter().map(|x| x[0]).collect() };
-    let q: Vec<Vec<[f64; 3]>> = positions.iter().map(|y| local_cubic(time_s, &values(time_s, y), narrow)).collect();
+    let (half_width_s, narrow) = (band.half_width_s, band.narrow_s);
+    let raw: Vec<Vec<[f64; 3]>> = positions.iter().map(|y| local_cubic(time_s, y, narrow)).collect();
+    let valid: Vec<bool> = (0..n).map(|i| raw.iter().all(|d| d[i].iter().all(|v| v.is_finite()))).collect();
+    let filter = Smoother::new(time_s, &valid, time_s, band.sigma_s);
+    let q: Vec<Vec<[f64; 3]>> = positions
+        .iter()
+        .map(|y| {
+            let values: Vec<f64> = local_cubic(time_s, y, half_width_s).into_iter().map(|x| x[0]).collect();
+            local_cubic(time_s, &values, narrow)
+        })
+        .collect();
     let mid: Vec<f64> = (0..n).map(|i| if i + 1 < n { 0.5 * (time_s[i] + time_s[i + 1]) } else { time_s[i] }).collect();
     let effort: Vec<Option<Vec<f64>>> = efforts
         .iter()
         .map(|e| {
             e.as_ref().map(|e| {
-                let at_mid = local_cubic(&mid, &values(&mid, e), narrow);
-                // Evaluate at the sample times: the hold's middle is half a step later.
-                (0..n).map(|i| at_mid[i][0] - at_mid[i][1] * (mid[i] - time_s[i])).collect()
+                let finite: Vec<bool> = e.iter().map(|v| v.is_finite()).collect();
+                Smoother::new(&mid, &finite, time_s, band.sigma_s).apply(e)
             })
         })
         .collect();
+    let effort_size: Vec<Option<Vec<f64>>> =
+        efforts.iter().map(|e| e.as_ref().map(|e| local_cubic(time_s, e, half_width_s).into_iter().map(|x| x[0]).collect())).collect();
     let (t0, t1) = (time_s.first().copied().unwrap_or(0.0), time_s.last().copied().unwrap_or(0.0));
-    let edge = half_width_s + narrow;
+    let edge = band.support_s();
     let usable = (0..n)
         .map(|i| {
             time_s[i] - t0 >= edge
@@ -163,7 +216,16 @@ pub fn signals(time_s: &[f64], positions: &[Vec<f64>], efforts: &[Option<Vec<f64
                 && effort.iter().flatten().all(|e| e[i].is_finite())
         })
         .collect();
-    Signals { time_s: time_s.to_vec(), q, effort, usable, half_width_s }
+    Signals { time_s: time_s.to_vec(), q, raw, filter, effort_size, effort, usable, band: *band }
+}
+
+impl Signals {
+    /// A term of the equation of motion evaluated at every sample from the narrowly
+    /// differentiated positions of dof `d`, then filtered like the efforts; NaN outside `keep`.
+    fn term(&self, d: usize, keep: &[bool], f: &dyn Fn([f64; 3]) -> f64) -> Vec<f64> {
+        let values: Vec<f64> = self.raw[d].iter().map(|&x| if x.iter().all(|v| v.is_finite()) { f(x) } else { f64::NAN }).collect();
+        self.filter.apply(&values).into_iter().zip(keep).map(|(v, &k)| if k { v } else { f64::NAN }).collect()
+    }
 }
 
 /// One candidate term on one joint: its kind, its hyper-parameters, its regressor columns.
@@ -182,6 +244,14 @@ struct Candidate {
     family: Family,
 }
 
+impl Candidate {
+    /// A law that extends its family's base law with more parameters (Stribeck's break-away
+    /// over Coulomb friction, a second Coulomb level for the reverse direction).
+    fn is_refinement(&self) -> bool {
+        self.kind == EffectKind::StribeckFriction || (self.kind == EffectKind::CoulombFriction && self.asymmetric)
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum Family {
     Friction,
@@ -198,6 +268,10 @@ enum Family {
 #[derive(Debug, Clone)]
 struct Column {
     rows: BTreeMap<usize, Vec<f64>>,
+    /// Its values on its candidate's own row in the motion's description (the smoothed
+    /// positions, no parallel filter): the size of a term is judged there, since the filter
+    /// attenuates fast terms (inertia) more than slow ones (gravity) and would bias the shares.
+    size: Vec<f64>,
 }
 
 /// Per row and fold: the Gram matrix of the columns touching the row, their products with the
@@ -266,7 +340,7 @@ pub struct EffortProblem<'a> {
 
 /// The effort the model as written needs at every sample, per dof: inverse dynamics plus the
 /// URDF's own `<dynamics>`; and per body the effort of its inertia alone (mass regressors).
-struct ModelEfforts {
+struct Efforts {
     tau: Vec<Vec<f64>>,
     /// Gravity's share of `tau` (the effort that holds the tree still at q).
     gravity: Vec<Vec<f64>>,
@@ -274,17 +348,25 @@ struct ModelEfforts {
     body_tau: BTreeMap<usize, Vec<Vec<f64>>>,
 }
 
-fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVec3, bodies: &[usize]) -> ModelEfforts {
+/// The model's efforts for the regression (from the raw derivatives, parallel-filtered) and for
+/// judging sizes (from the smoothed description of the motion).
+struct ModelEfforts {
+    filtered: Efforts,
+    size: Efforts,
+}
+
+/// The model's efforts evaluated sample by sample at the motion `q` (NaN where it is not finite).
+fn efforts_at(model: &GapModel, tree: &MultiBody, q_of: &[Vec<[f64; 3]>], gravity: DVec3, bodies: &[usize]) -> Efforts {
     let dofs = model.dofs();
-    let n = sig.time_s.len();
     let nd = dofs.len();
+    let n = q_of.first().map_or(0, Vec::len);
     let mut tau = vec![vec![f64::NAN; n]; nd];
     let mut held = vec![vec![f64::NAN; n]; nd];
     let mut body_tau: BTreeMap<usize, Vec<Vec<f64>>> = bodies.iter().map(|&b| (b, vec![vec![f64::NAN; n]; nd])).collect();
     let (mut q, mut qd, mut qdd) = (vec![0.0; nd], vec![0.0; nd], vec![0.0; nd]);
-    for i in (0..n).filter(|&i| sig.usable[i]) {
+    for i in (0..n).filter(|&i| q_of.iter().all(|d| d[i].iter().all(|v| v.is_finite()))) {
         for d in 0..nd {
-            [q[d], qd[d], qdd[d]] = sig.q[d][i];
+            [q[d], qd[d], qdd[d]] = q_of[d][i];
         }
         let k = tree.kinematics(&q, &qd, &qdd, gravity);
         let all = tree.efforts_with(&k, |b| Some(tree.bodies()[b].inertia));
@@ -303,7 +385,23 @@ fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVe
             }
         }
     }
-    ModelEfforts { tau, gravity: held, body_tau }
+    Efforts { tau, gravity: held, body_tau }
+}
+
+fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVec3, bodies: &[usize]) -> ModelEfforts {
+    let raw = efforts_at(model, tree, &sig.raw, gravity, bodies);
+    // Parallel filtering: each term passes the filter the measured efforts passed.
+    let filtered = |v: Vec<Vec<f64>>| -> Vec<Vec<f64>> {
+        v.iter()
+            .map(|x| sig.filter.apply(x).into_iter().enumerate().map(|(i, y)| if sig.usable[i] { y } else { f64::NAN }).collect())
+            .collect()
+    };
+    let filtered = Efforts {
+        tau: filtered(raw.tau),
+        gravity: filtered(raw.gravity),
+        body_tau: raw.body_tau.into_iter().map(|(b, v)| (b, filtered(v))).collect(),
+    };
+    ModelEfforts { filtered, size: efforts_at(model, tree, &sig.q, gravity, bodies) }
 }
 
 /// The moving part of a joint: its child body and the bodies welded to it.
@@ -351,15 +449,17 @@ impl<'a> EffortProblem<'a> {
         for (r, &j) in effort_joints.iter().enumerate() {
             let d = dofs.iter().position(|&x| x == j)?;
             let measured = sig.effort[d].as_ref()?;
-            let ok: Vec<bool> = (0..n).map(|i| sig.usable[i] && train[i] && !excluded[r][i] && me.tau[d][i].is_finite()).collect();
-            let residual: Vec<f64> = (0..n).map(|i| if ok[i] { measured[i] - me.tau[d][i] } else { f64::NAN }).collect();
-            // The joint's own efforts: what is applied, and what gravity and the motion each ask
-            // of it (on a passive joint these cancel, and the applied effort is zero).
+            let ok: Vec<bool> = (0..n).map(|i| sig.usable[i] && train[i] && !excluded[r][i] && me.filtered.tau[d][i].is_finite()).collect();
+            let residual: Vec<f64> = (0..n).map(|i| if ok[i] { measured[i] - me.filtered.tau[d][i] } else { f64::NAN }).collect();
+            // The joint's own efforts over the motion, in its description: what the motion asks
+            // of it beyond holding it still against gravity, and what is applied beyond that
+            // holding effort (on a passive joint, the gravity that moves it). The static holding
+            // effort of a loaded arm is left out: next to it every dynamic term of a heavy link
+            // would look small, though the motion depends on nothing else.
+            let z = &me.size;
+            let applied = &sig.effort_size[d];
             let rms_of = |f: &dyn Fn(usize) -> f64| rms((0..n).filter(|&i| ok[i]).map(f));
-            let scale = rms_of(&|i| measured[i])
-                .max(rms_of(&|i| me.tau[d][i]))
-                .max(rms_of(&|i| me.gravity[d][i]))
-                .max(rms_of(&|i| me.tau[d][i] - me.gravity[d][i]));
+            let scale = rms_of(&|i| applied.as_ref().map_or(0.0, |e| e[i]) - z.gravity[d][i]).max(rms_of(&|i| z.tau[d][i] - z.gravity[d][i]));
             rows.push(RowInfo { joint: j, dof: d, residual, effort_rms: scale });
             used.push(ok);
         }
@@ -452,12 +552,12 @@ const STRIBECK_GRID: [f64; 3] = [0.05, 0.15, 0.4];
 const ENGAGE_GRID: [f64; 5] = [0.1, 0.2, 0.35, 0.5, 0.7];
 
 impl EffortProblem<'_> {
-    fn push_column(&mut self, row: usize, values: Vec<f64>) -> usize {
-        self.columns.push(Column { rows: BTreeMap::from([(row, values)]) });
+    fn push_column(&mut self, row: usize, (values, size): (Vec<f64>, Vec<f64>)) -> usize {
+        self.columns.push(Column { rows: BTreeMap::from([(row, values)]), size });
         self.columns.len() - 1
     }
 
-    fn push(&mut self, row: usize, kind: EffectKind, family: Family, hyper: Vec<f64>, asymmetric: bool, cols: Vec<Vec<f64>>) {
+    fn push(&mut self, row: usize, kind: EffectKind, family: Family, hyper: Vec<f64>, asymmetric: bool, cols: Vec<(Vec<f64>, Vec<f64>)>) {
         let columns = cols.into_iter().map(|c| self.push_column(row, c)).collect();
         self.candidates.push(Candidate { row, kind, hyper, asymmetric, columns, family });
     }
@@ -470,7 +570,9 @@ impl EffortProblem<'_> {
             let joint = &self.model.joints[j];
             let chain = in_serial_chain(self.model, j);
             let ok = self.used[r].clone();
-            let col = |f: &dyn Fn([f64; 3]) -> f64| -> Vec<f64> { (0..n).map(|i| if ok[i] { f(sig.q[d][i]) } else { f64::NAN }).collect() };
+            let col = |f: &dyn Fn([f64; 3]) -> f64| -> (Vec<f64>, Vec<f64>) {
+                (sig.term(d, &ok, f), (0..n).map(|i| if ok[i] { f(sig.q[d][i]) } else { f64::NAN }).collect())
+            };
             let v_rms = rms((0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][1])).max(1e-6);
             let qs: Vec<f64> = (0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][0]).collect();
             let (lo, hi) = qs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
@@ -529,14 +631,18 @@ impl EffortProblem<'_> {
         let mut rows = BTreeMap::new();
         for (rr, info) in self.rows.iter().enumerate() {
             let values: Vec<f64> = (0..n)
-                .map(|i| if self.used[rr][i] { part_of[r].iter().map(|b| me.body_tau[b][info.dof][i]).sum() } else { f64::NAN })
+                .map(|i| if self.used[rr][i] { part_of[r].iter().map(|b| me.filtered.body_tau[b][info.dof][i]).sum() } else { f64::NAN })
                 .collect();
             if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
                 rows.insert(rr, values);
             }
         }
         rows.get(&r)?;
-        self.columns.push(Column { rows });
+        let d = self.rows[r].dof;
+        let size = (0..n)
+            .map(|i| if self.used[r][i] { part_of[r].iter().map(|b| me.size.body_tau[b][d][i]).sum() } else { f64::NAN })
+            .collect();
+        self.columns.push(Column { rows, size });
         Some(Candidate {
             row: r,
             kind: EffectKind::MassScale,
@@ -681,13 +787,31 @@ impl EffortProblem<'_> {
             .collect()
     }
 
-    /// RMS effort of candidate c's term on its own row under `theta`.
+    /// RMS effort of candidate c's term on its own row under `theta`, in the motion's description.
     fn term_rms(&self, c: usize, theta: &BTreeMap<usize, f64>) -> f64 {
+        self.change_rms(c, theta, None)
+    }
+
+    /// Effort of candidate c's term under `theta` at sample i, in the motion's description.
+    fn term_at(&self, c: usize, theta: &BTreeMap<usize, f64>, i: usize) -> f64 {
+        self.candidates[c].columns.iter().map(|col| theta.get(col).copied().unwrap_or(0.0) * self.columns[*col].size[i]).sum()
+    }
+
+    /// RMS of what candidate c under `theta` changes on its row: its whole term, or, where it
+    /// replaces a member of its family (`replaced`, under `theta_replaced`), the difference
+    /// (a Stribeck law in place of a Coulomb one changes only the break-away).
+    fn change_rms(&self, c: usize, theta: &BTreeMap<usize, f64>, replaced: Option<(usize, &BTreeMap<usize, f64>)>) -> f64 {
+        let row = self.candidates[c].row;
+        let n = self.rows[row].residual.len();
+        rms((0..n)
+            .filter(|&i| self.used[row][i])
+            .map(|i| self.term_at(c, theta, i) - replaced.map_or(0.0, |(r, t)| self.term_at(r, t, i))))
+    }
+
+    /// The member of c's family on c's joint in `set`, other than c.
+    fn family_member(&self, set: &[usize], c: usize) -> Option<usize> {
         let cand = &self.candidates[c];
-        let n = self.rows[cand.row].residual.len();
-        rms((0..n).filter(|&i| self.used[cand.row][i]).map(|i| {
-            cand.columns.iter().map(|col| theta.get(col).copied().unwrap_or(0.0) * self.columns[*col].rows[&cand.row][i]).sum::<f64>()
-        }))
+        set.iter().copied().find(|&x| x != c && self.candidates[x].row == cand.row && self.candidates[x].family == cand.family)
     }
 }
 
@@ -727,8 +851,9 @@ impl EffortProblem<'_> {
         out
     }
 
-    /// Compares `after` with `before` on the rows `rows`.
-    fn verdict(&self, before: &Evaluation, after: &Evaluation, rows: &[usize], c: usize) -> Verdict {
+    /// Compares `after` (with candidate c) with `before` on the rows `rows`; `replaced` is the
+    /// member of c's family that c replaces in `before`, if any.
+    fn verdict(&self, before: &Evaluation, after: &Evaluation, rows: &[usize], c: usize, replaced: Option<usize>) -> Verdict {
         let k = self.rules.folds.max(2);
         let sum = |e: &Evaluation| rows.iter().map(|&r| e.row_sse(r)).sum::<f64>();
         let (b, a) = (sum(before), sum(after));
@@ -746,7 +871,7 @@ impl EffortProblem<'_> {
         Verdict {
             gain: if b > 0.0 { (b - a) / b } else { 0.0 },
             fold_share: better as f64 / informative.len().max(1) as f64,
-            effort_share: self.term_rms(c, &after.theta) / self.rows[row].effort_rms.max(1e-12),
+            effort_share: self.change_rms(c, &after.theta, replaced.map(|r| (r, &before.theta))) / self.rows[row].effort_rms.max(1e-12),
             plausible: self.plausible(c, &after.theta),
         }
     }
@@ -794,11 +919,13 @@ impl EffortProblem<'_> {
         for _ in 0..4 * self.rows.len() + 8 {
             let mut best: Option<(usize, Verdict, Evaluation)> = None;
             for c in 0..self.candidates.len() {
-                if chosen.contains(&c) {
+                // A refinement enters only in place of its base law, so that what it adds is
+                // judged on its own.
+                if chosen.contains(&c) || (self.candidates[c].is_refinement() && self.family_member(chosen, c).is_none()) {
                     continue;
                 }
                 let e = self.evaluate(&self.with(chosen, c));
-                let v = self.verdict(current, &e, &self.rows_of(c), c);
+                let v = self.verdict(current, &e, &self.rows_of(c), c, self.family_member(chosen, c));
                 // Ties (look-alike kinds) go to the earlier candidate.
                 if self.passes(&v) && best.as_ref().is_none_or(|(_, bv, _)| v.gain > bv.gain * 1.001 + 1e-12) {
                     best = Some((c, v, e));
@@ -818,7 +945,7 @@ impl EffortProblem<'_> {
             for idx in 0..chosen.len() {
                 let rest: Vec<usize> = chosen.iter().copied().enumerate().filter(|&(k, _)| k != idx).map(|(_, c)| c).collect();
                 let e = self.evaluate(&rest);
-                let v = self.verdict(&e, current, &self.rows_of(chosen[idx]), chosen[idx]);
+                let v = self.verdict(&e, current, &self.rows_of(chosen[idx]), chosen[idx], None);
                 if !self.passes(&v) {
                     *chosen = rest;
                     *current = e;
@@ -883,7 +1010,7 @@ impl EffortProblem<'_> {
         for &c in &chosen {
             let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
             let without = self.evaluate(&rest);
-            let v = self.verdict(&without, &fitted, &self.rows_of(c), c);
+            let v = self.verdict(&without, &fitted, &self.rows_of(c), c, None);
             let effect = self.effect_of(c, &fitted.theta);
             let jack: Vec<Effect> = fitted.theta_without.iter().map(|t| self.effect_of(c, t)).collect();
             let std: Vec<f64> = (0..effect.params.len())
@@ -923,7 +1050,7 @@ impl EffortProblem<'_> {
                 continue;
             }
             let e = self.evaluate(&self.with(chosen, c));
-            let v = self.verdict(fitted, &e, &self.rows_of(c), c);
+            let v = self.verdict(fitted, &e, &self.rows_of(c), c, self.family_member(chosen, c));
             let entry = best.entry((cand.row, cand.kind)).or_insert((v, c));
             if v.gain > entry.0.gain {
                 *entry = (v, c);

@@ -318,18 +318,20 @@ fn analyze_joint(
     };
     let mut fell_back = false;
     let (chosen, confidence) = match given {
+        // A joint whose replay is already within its noise floor gets no effects, whatever the
+        // effort space saw (a joint at rest tells nothing about its physics).
+        _ if spans.is_empty() => (nominal.clone(), Vec::new()),
         // Structure from effort space; parameters refined by output error (DIDIM). When the
         // motion is still far from explained (effort space could not see an effect that acts
         // mostly near a stop, say), the terms are chosen here instead.
         Some(g) => {
             let mut refined =
                 if g.effects.is_empty() { nominal.clone() } else { fit::fit(&problem, &g.effects, Some(&free_mask(&g.effects)), None, 25) };
-            // The refined levels face the same materiality rule as in effort space: a weight
-            // change that shrank below it is dropped.
+            // The refined levels face the same rules as in effort space: a weight change that
+            // shrank below materiality, or a level the refinement cannot tell from none (within
+            // two σ of it), is dropped, one at a time, and the rest refitted.
             let rules = effort::SelectionRules::default();
-            if let Some(k) =
-                refined.effects.iter().position(|e| e.kind == EffectKind::MassScale && (e.params[0] - 1.0).abs() < rules.min_mass_change)
-            {
+            while let Some(k) = (0..refined.effects.len()).find(|&k| not_material(&refined.effects[k], &refined.param_std[k], &rules)) {
                 let mut rest = refined.effects.clone();
                 rest.remove(k);
                 refined = if rest.is_empty() { nominal.clone() } else { fit::fit(&problem, &rest, Some(&free_mask(&rest)), None, 25) };
@@ -368,7 +370,6 @@ fn analyze_joint(
                 (refined, confidence)
             }
         }
-        None if spans.is_empty() => (nominal.clone(), Vec::new()),
         None => select_here(),
     };
     // Terms chosen in position space must hold on data they were not fitted to: a structure
@@ -503,6 +504,18 @@ fn mostly_at_a_stop(joint: &model::GapJoint, y: &[f64], span: Span) -> bool {
     let vals: Vec<f64> = y[span.start..=span.end].iter().copied().filter(|v| v.is_finite()).collect();
     let near = vals.iter().filter(|&&q| q <= lo + band || q >= hi - band).count();
     2 * near >= vals.len().max(1)
+}
+
+/// Whether a refined effect is nothing: a weight change below materiality, or a level within two
+/// standard deviations of the level that means no effect.
+fn not_material(e: &Effect, std: &[f64], rules: &effort::SelectionRules) -> bool {
+    let level = e.params.first().copied().unwrap_or(f64::NAN);
+    let sd = std.first().copied().unwrap_or(f64::NAN);
+    match e.kind {
+        EffectKind::MassScale => (level - 1.0).abs() < rules.min_mass_change || (sd.is_finite() && (level - 1.0).abs() < 2.0 * sd),
+        EffectKind::EndStop | EffectKind::Unknown => false,
+        _ => sd.is_finite() && level.abs() < 2.0 * sd,
+    }
 }
 
 /// Effects found in effort space for a joint whose parameters are refined in position space.

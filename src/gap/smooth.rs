@@ -1,9 +1,10 @@
-//! Zero-phase smoothing and differentiation of sampled signals, for effort-space identification:
-//! a local cubic least-squares fit over ±`half_width_s` around each sample (Savitzky–Golay on
-//! irregular time, dropouts skipped). The same smoother is applied to positions (value, velocity,
-//! acceleration) and to efforts (value), so both sides of the equation of motion see the same
-//! delay (none) and the same bandwidth ("parallel filtering", Gautier). A cubic keeps the
-//! acceleration unbiased at turning points, where a quadratic would flatten it.
+//! Zero-phase smoothing and differentiation of sampled signals, for effort-space identification.
+//! [`local_cubic`]: a local cubic least-squares fit over ±`half_width_s` around each sample
+//! (Savitzky–Golay on irregular time, dropouts skipped) gives value, velocity and acceleration;
+//! a cubic keeps the acceleration unbiased at turning points, where a quadratic would flatten it.
+//! [`Smoother`]: a Gaussian low-pass applied alike to every term of the equation of motion and
+//! to the measured efforts, so both sides see the same delay (none) and the same bandwidth
+//! ("parallel filtering", Gautier).
 
 use crate::linalg::solve_spd;
 
@@ -47,6 +48,65 @@ pub fn local_cubic(time_s: &[f64], y: &[f64], half_width_s: f64) -> Vec<[f64; 3]
     out
 }
 
+/// A zero-phase Gaussian low-pass as a fixed linear filter: per output time, the normalised
+/// weights `exp(−Δt²/2σ²)` of the valid samples within ±[`GAUSS_SUPPORT_SIGMAS`]σ. Built once,
+/// applied to many signals of the same sampling (the terms of an effort regression and the
+/// efforts themselves, "parallel filtering"). A Gaussian has no side lobes: what lies above the
+/// cut-off (torque ripple, a controller's chatter, a sensor's own dynamics) is removed, not
+/// folded back at −20 dB as a local polynomial's side lobes would. Its attenuation of the motion
+/// band needs no correction: both sides of the equation pass the same filter. Irregular time and
+/// dropouts are handled by the normalisation (a kernel average, Nadaraya–Watson).
+#[derive(Debug, Clone)]
+pub struct Smoother {
+    /// Per output time: (sample index, weight); empty where no valid sample is in reach.
+    weights: Vec<Vec<(usize, f64)>>,
+}
+
+/// Reach of the Gaussian filter in σ (weights below e^−4.5 ≈ 1 % are dropped).
+pub const GAUSS_SUPPORT_SIGMAS: f64 = 3.0;
+
+/// The frequency at which a Gaussian filter of width σ halves an amplitude, times σ:
+/// `exp(−(2π f σ)²/2) = ½` ⇒ `f σ = √(2 ln 2) / 2π`.
+pub const GAUSS_HALF_GAIN_F_SIGMA: f64 = 0.187_390_6;
+
+impl Smoother {
+    /// The Gaussian filter of width `sigma_s` over the samples at `time_s` for which `valid`
+    /// holds, evaluated at `eval_s`.
+    #[must_use]
+    pub fn new(time_s: &[f64], valid: &[bool], eval_s: &[f64], sigma_s: f64) -> Self {
+        let idx: Vec<usize> = (0..time_s.len()).filter(|&i| valid[i] && time_s[i].is_finite()).collect();
+        let times: Vec<f64> = idx.iter().map(|&i| time_s[i]).collect();
+        let reach = GAUSS_SUPPORT_SIGMAS * sigma_s;
+        let weights = eval_s
+            .iter()
+            .map(|&t0| {
+                if !t0.is_finite() {
+                    return Vec::new();
+                }
+                let lo = times.partition_point(|&t| t < t0 - reach);
+                let hi = times.partition_point(|&t| t <= t0 + reach);
+                let raw: Vec<(usize, f64)> =
+                    (lo..hi).map(|k| (idx[k], (-0.5 * ((times[k] - t0) / sigma_s).powi(2)).exp())).collect();
+                let total: f64 = raw.iter().map(|(_, w)| w).sum();
+                if total <= 0.0 {
+                    return Vec::new();
+                }
+                raw.into_iter().map(|(i, w)| (i, w / total)).collect()
+            })
+            .collect();
+        Self { weights }
+    }
+
+    /// The filtered signal: NaN where no sample is in reach or a value in reach is not finite.
+    #[must_use]
+    pub fn apply(&self, y: &[f64]) -> Vec<f64> {
+        self.weights
+            .iter()
+            .map(|w| if w.is_empty() { f64::NAN } else { w.iter().map(|&(i, c)| c * y[i]).sum() })
+            .collect()
+    }
+}
+
 /// Value, first and second derivative at `t0` of the least-squares cubic through `window`.
 fn fit_cubic(time_s: &[f64], y: &[f64], window: &[usize], t0: f64) -> Option<[f64; 3]> {
     // Scaled time keeps the normal equations well conditioned.
@@ -69,6 +129,23 @@ fn fit_cubic(time_s: &[f64], y: &[f64], window: &[usize], t0: f64) -> Option<[f6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_gaussian_filter_keeps_a_constant_and_halves_its_cut_off_frequency() {
+        let time: Vec<f64> = (0..2000).map(|i| f64::from(i) * 0.002).collect();
+        let sigma = 0.03;
+        let f_half = GAUSS_HALF_GAIN_F_SIGMA / sigma;
+        let filter = Smoother::new(&time, &vec![true; time.len()], &time, sigma);
+        let constant = filter.apply(&vec![2.5; time.len()]);
+        assert!(constant.iter().all(|v| (v - 2.5).abs() < 1e-12));
+        let wave: Vec<f64> = time.iter().map(|t| (std::f64::consts::TAU * f_half * t).sin()).collect();
+        let out = filter.apply(&wave);
+        let peak = out[500..1500].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!((peak - 0.5).abs() < 0.01, "gain {peak} at the half-gain frequency");
+        let fast: Vec<f64> = time.iter().map(|t| (std::f64::consts::TAU * 3.0 * f_half * t).sin()).collect();
+        let peak = filter.apply(&fast)[500..1500].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(peak < 1e-2, "gain {peak} at three times the cut-off");
+    }
 
     #[test]
     fn a_cubic_is_reproduced_exactly_on_irregular_time_with_dropouts() {
