@@ -14,6 +14,7 @@ use std::path::Path;
 use eframe::egui;
 use egui_kittest::kittest::Queryable;
 use egui_kittest::{Harness, SnapshotOptions};
+use partscene::app::review::review_queue;
 use partscene::app::{AppState, Autosave, LaunchOptions, PartsceneApp, part_name};
 use partscene::edit::SceneSource;
 use partscene::kinematics::JointKind;
@@ -195,6 +196,57 @@ fn a_crash_leaves_an_autosave_that_the_next_start_recovers() {
     assert_eq!(next.doc.as_ref().unwrap().model().joint_of(door).unwrap().kind, JointKind::Fixed);
 }
 
+fn queue(h: &Harness<'_, PartsceneApp>) -> Vec<PartId> {
+    let doc = h.state().state.doc.as_ref().unwrap();
+    review_queue(doc.model(), doc.pins()).iter().map(|q| q.child).collect()
+}
+
+#[test]
+fn the_review_queue_steps_to_the_least_certain_joint_and_a_fixed_joint_leaves_it() {
+    if !gpu_or_skip("the_review_queue_steps_to_the_least_certain_joint_and_a_fixed_joint_leaves_it") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = editor(&dir.path().join("autosave.json"), (1500.0, 1500.0));
+    let before = queue(&h);
+    assert_eq!(before.len(), model(&h).joints.len(), "every joint starts in the queue");
+    let least = before[0];
+
+    // One key steps to the least certain joint; the inspector shows its evidence.
+    h.key_press(egui::Key::N);
+    h.run_steps(2);
+    assert_eq!(h.state().state.selected, Some(least));
+    assert!(h.query_by_label_contains("Evidence · confidence").is_some(), "no evidence panel for the selected joint");
+
+    // Fix it in the inspector (another joint type): it leaves the queue.
+    let kind = model(&h).joint_of(least).unwrap().kind;
+    let other = if kind == JointKind::Fixed { JointKind::Revolute } else { JointKind::Fixed };
+    h.get_by_label("Joint type").click();
+    h.run_steps(2);
+    h.get_by_label(other.name()).click();
+    h.run_steps(2);
+    assert_eq!(model(&h).joint_of(least).unwrap().kind, other, "{:?}", h.state().state.message);
+    let after_fix = queue(&h);
+    assert!(!after_fix.contains(&least));
+    assert_eq!(after_fix.len(), before.len() - 1);
+
+    // The key now goes to the next least certain one; confirming it (A) takes it out too and
+    // moves on.
+    h.key_press(egui::Key::N);
+    h.run_steps(2);
+    let second = after_fix[0];
+    assert_eq!(h.state().state.selected, Some(second));
+    h.key_press(egui::Key::A);
+    h.run_steps(2);
+    let after_confirm = queue(&h);
+    assert!(!after_confirm.contains(&second));
+    assert_eq!(h.state().state.selected, after_confirm.first().copied());
+    // Undo gives the confirmed joint back to the queue.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run_steps(2);
+    assert!(queue(&h).contains(&second));
+}
+
 /// Snapshot tolerance: lavapipe is deterministic on one machine; allow for small driver changes.
 fn snapshot_options() -> SnapshotOptions {
     SnapshotOptions::new().threshold(2.0).max_failed_pixels(2000)
@@ -215,6 +267,29 @@ fn snapshot_of_the_editor_with_the_3d_view_and_a_door_opened() {
     h.state_mut().state.apply(partscene::app::AppCommand::SetJointPosition { child: door, q: upper });
     h.run_steps(3);
     h.snapshot_options("editor_demo_door_open", &snapshot_options());
+}
+
+#[test]
+fn snapshot_of_the_review_queue_and_the_evidence_of_the_least_certain_joint() {
+    if !gpu_or_skip("snapshot_of_the_review_queue_and_the_evidence_of_the_least_certain_joint") {
+        return;
+    }
+    let mut state = AppState::new(PipelineConfig::default(), Autosave::at(None));
+    state.open_blocking(SceneSource::Demo { seed: 0, clean: false }, PinnedEdits::default());
+    state.apply(partscene::app::AppCommand::ReviewNext);
+    assert!(state.selected.is_some());
+    let mut h = Harness::builder().with_size((420.0, 760.0)).wgpu().build_ui_state(
+        |ui, state: &mut AppState| {
+            let mut commands = Vec::new();
+            let mut panels = partscene::app::PanelState::default();
+            partscene::app::review::review_ui(ui, state, &mut commands);
+            ui.separator();
+            partscene::app::panels::inspector_ui(ui, state, &mut panels, &mut commands);
+        },
+        state,
+    );
+    h.run_steps(2);
+    h.snapshot_options("review_queue_and_evidence", &snapshot_options());
 }
 
 #[test]

@@ -5,6 +5,7 @@
 
 pub mod gap_panel;
 pub mod panels;
+pub mod review;
 pub mod state;
 pub mod view3d;
 
@@ -105,10 +106,14 @@ impl PartsceneApp {
             panels::tree_ui(ui, state, &mut commands);
         });
         egui::Panel::right("inspector").resizable(true).default_size(300.0).show(ui, |ui| {
-            ui.heading("Inspector");
-            panels::inspector_ui(ui, state, panels, &mut commands);
-            ui.separator();
-            panels::joints_ui(ui, state, &mut commands);
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                review::review_ui(ui, state, &mut commands);
+                ui.separator();
+                ui.heading("Inspector");
+                panels::inspector_ui(ui, state, panels, &mut commands);
+                ui.separator();
+                panels::joints_ui(ui, state, &mut commands);
+            });
         });
         egui::Panel::bottom("graph")
             .resizable(true)
@@ -160,6 +165,17 @@ impl PartsceneApp {
 
 fn shortcuts(ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
     use egui::{Key, KeyboardShortcut, Modifiers};
+    // The review keys are plain letters: only while no text field has the keyboard.
+    if !ctx.egui_wants_keyboard_input() {
+        ctx.input_mut(|i| {
+            if i.consume_key(Modifiers::NONE, Key::N) {
+                commands.push(AppCommand::ReviewNext);
+            }
+            if i.consume_key(Modifiers::NONE, Key::A) {
+                commands.push(AppCommand::ConfirmSelected);
+            }
+        });
+    }
     let redo = KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
     let redo_y = KeyboardShortcut::new(Modifiers::COMMAND, Key::Y);
     let undo = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z);

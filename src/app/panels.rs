@@ -391,6 +391,7 @@ pub fn inspector_ui(ui: &mut egui::Ui, state: &AppState, panels: &mut PanelState
     if jkind != joint.kind {
         commands.push(AppCommand::Edit(EditCommand::SetJointKind { child: id, kind: jkind }));
     }
+    super::review::evidence_ui(ui, model, id);
     if joint.kind.is_movable() {
         // Axis: edited in a buffer, committed when the drag or typing ends (one undo step).
         let revision = doc.revision();

@@ -50,6 +50,10 @@ pub enum AppCommand {
     DiscardAutosave,
     FrameAll,
     SetView(ViewPreset),
+    /// Select the next joint of the review queue (least confident first).
+    ReviewNext,
+    /// Confirm the selected joint as it is (pins its parent and type) and select the next one.
+    ConfirmSelected,
 }
 
 /// A line for the status bar.
@@ -377,6 +381,7 @@ impl AppState {
                 self.camera.pitch_rad = framed.pitch_rad;
                 self.needs_framing = true;
             }
+            AppCommand::ReviewNext | AppCommand::ConfirmSelected => super::review::apply(self, &command),
         }
     }
 

@@ -27,6 +27,9 @@ pub enum EditCommand {
     SetPrimitiveKind { part: PartId, kind: PrimitiveKind },
     /// Forget every pin on `part` (its parent, joint and primitive go back to the pipeline's choice).
     Unpin { part: PartId },
+    /// The annotator agrees with the joint above `child`: its parent and type are pinned as they
+    /// are (the joint leaves the review queue, and later runs keep it).
+    Confirm { child: PartId },
 }
 
 impl EditCommand {
@@ -38,7 +41,8 @@ impl EditCommand {
             | EditCommand::SetJointKind { child, .. }
             | EditCommand::SetAxis { child, .. }
             | EditCommand::FlipAxis { child }
-            | EditCommand::SetLimits { child, .. } => child,
+            | EditCommand::SetLimits { child, .. }
+            | EditCommand::Confirm { child } => child,
             EditCommand::SetPrimitiveKind { part, .. } | EditCommand::Unpin { part } => part,
         }
     }
@@ -54,6 +58,7 @@ impl EditCommand {
             EditCommand::SetLimits { child, lower, upper } => format!("part {child}: limits -> [{lower:.3}, {upper:.3}]"),
             EditCommand::SetPrimitiveKind { part, kind } => format!("part {part}: primitive -> {}", kind.name()),
             EditCommand::Unpin { part } => format!("part {part}: pins cleared"),
+            EditCommand::Confirm { child } => format!("part {child}: parent and joint type confirmed"),
         }
     }
 }

@@ -316,6 +316,11 @@ impl Document {
                 pins.primitive_kind.insert(part, kind);
             }
             EditCommand::Unpin { part } => unpin(pins, part),
+            EditCommand::Confirm { child } => {
+                let j = needs_joint()?;
+                pins.parent.insert(child, j.parent);
+                pins.joint_kind.insert(child, j.kind);
+            }
         }
         Ok(())
     }

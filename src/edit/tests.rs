@@ -109,6 +109,17 @@ fn edits_are_pinned_and_refusals_change_nothing() {
             assert_eq!((b.lower, b.upper), (-a.upper, -a.lower));
         }),
     );
+    // Confirming a joint pins its parent and type as they are; the scene does not change.
+    check(
+        |d| EditCommand::Confirm { child: door_with_handle(d).0 },
+        Ok(&|before, after| {
+            let (door, parent, _) = door_with_handle(before);
+            assert_eq!(after.pins().parent.get(&door), Some(&parent));
+            assert_eq!(after.pins().joint_kind.get(&door), Some(&before.model().joint_of(door).unwrap().kind));
+            assert_eq!(after.model().joints, before.model().joints);
+        }),
+    );
+    check(|d| EditCommand::Confirm { child: d.model().objects[0].root_part }, Err("has no joint"));
     // A new primitive kind re-fits the part.
     check(
         |d| EditCommand::SetPrimitiveKind { part: door_with_handle(d).2, kind: PrimitiveKind::Sphere },
