@@ -19,4 +19,11 @@ if [ -n "$leaks" ]; then
   echo "$leaks" >&2
   exit 1
 fi
+# The browser front end depends on the app, never the other way (the app calls app::Platform).
+back=$(grep -rnE '^[^/]*\bcrate::web\b' src/app || true)
+if [ -n "$back" ]; then
+  echo "error: src/app uses crate::web (the front end must implement app::Platform instead):" >&2
+  echo "$back" >&2
+  exit 1
+fi
 echo "core dependency check: ok ($(echo "$tree" | wc -l) crates, none forbidden)"

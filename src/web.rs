@@ -1,11 +1,31 @@
 //! The editor in the browser (wasm32): start-up on the page's canvas, reading files the user drops
 //! (browsers give their bytes asynchronously) and downloading exports.
 
+use std::sync::Arc;
 use std::sync::mpsc::Sender;
 
 use wasm_bindgen::JsCast;
 
-use crate::app::{LaunchOptions, PartsceneApp};
+use crate::app::platform::DroppedFiles;
+use crate::app::{LaunchOptions, PartsceneApp, Platform};
+
+/// The browser as the editor's platform: the tab's title, files read asynchronously, downloads.
+#[derive(Debug, Default)]
+pub struct Browser;
+
+impl Platform for Browser {
+    fn set_title(&self, title: &str) {
+        set_title(title);
+    }
+
+    fn read_dropped(&self, files: DroppedFiles, tx: Sender<(String, Vec<u8>)>) {
+        read_dropped(files, tx);
+    }
+
+    fn download(&self, name: &str, bytes: &[u8]) -> Result<(), String> {
+        download(name, bytes)
+    }
+}
 
 /// The id of the canvas in `web/index.html`.
 pub const CANVAS_ID: &str = "partscene_canvas";
@@ -23,7 +43,7 @@ pub fn start() {
             return;
         };
         // No autosave in the browser (no file system); the demo room opens by default.
-        let launch = LaunchOptions { autosave: None, ..LaunchOptions::default() };
+        let launch = LaunchOptions { autosave: None, platform: Arc::new(Browser), ..LaunchOptions::default() };
         let result = eframe::WebRunner::new()
             .start(canvas, eframe::WebOptions::default(), Box::new(move |cc| Ok(Box::new(PartsceneApp::new(cc, launch)))))
             .await;
@@ -38,7 +58,7 @@ fn log_level() -> log::LevelFilter {
 }
 
 /// Reads dropped files in the background; each arrives on `tx` as (file name, bytes).
-pub fn read_dropped(files: Vec<std::sync::Arc<dyn eframe::egui::DroppedFile + Send + Sync>>, tx: Sender<(String, Vec<u8>)>) {
+fn read_dropped(files: DroppedFiles, tx: Sender<(String, Vec<u8>)>) {
     for file in files {
         let tx = tx.clone();
         wasm_bindgen_futures::spawn_local(async move {
@@ -55,7 +75,7 @@ pub fn read_dropped(files: Vec<std::sync::Arc<dyn eframe::egui::DroppedFile + Se
 }
 
 /// Offers `bytes` as a download named `name`.
-pub fn download(name: &str, bytes: &[u8]) -> Result<(), String> {
+fn download(name: &str, bytes: &[u8]) -> Result<(), String> {
     let js_err = |e: wasm_bindgen::JsValue| format!("{e:?}");
     let document = web_sys::window().and_then(|w| w.document()).ok_or("no document")?;
     let parts = js_sys::Array::new();
@@ -73,7 +93,7 @@ pub fn download(name: &str, bytes: &[u8]) -> Result<(), String> {
 }
 
 /// Sets the page title (it names the open scene; the browser test waits for it).
-pub fn set_title(title: &str) {
+fn set_title(title: &str) {
     if let Some(document) = web_sys::window().and_then(|w| w.document())
         && document.title() != title
     {

@@ -40,6 +40,7 @@ fn launch(autosave: &Path) -> LaunchOptions {
         session: None,
         autosave: Some(autosave.to_path_buf()),
         config: PipelineConfig::default(),
+        ..LaunchOptions::default()
     }
 }
 

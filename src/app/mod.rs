@@ -5,15 +5,18 @@
 
 pub mod gap_panel;
 pub mod panels;
+pub mod platform;
 pub mod review;
 pub mod state;
 pub mod view3d;
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use eframe::egui;
 
 pub use panels::{PanelState, part_name};
+pub use platform::Platform;
 pub use state::{AppCommand, AppState, Autosave, Message};
 pub use view3d::ViewCache;
 
@@ -30,11 +33,19 @@ pub struct LaunchOptions {
     /// Where edits are autosaved for crash recovery (`None`: no autosave).
     pub autosave: Option<PathBuf>,
     pub config: PipelineConfig,
+    /// The platform's seam (title, asynchronous file reads, downloads).
+    pub platform: Arc<dyn Platform>,
 }
 
 impl Default for LaunchOptions {
     fn default() -> Self {
-        Self { source: None, session: None, autosave: Autosave::default_path(), config: PipelineConfig::default() }
+        Self {
+            source: None,
+            session: None,
+            autosave: Autosave::default_path(),
+            config: PipelineConfig::default(),
+            platform: Arc::new(platform::Desktop),
+        }
     }
 }
 
@@ -63,6 +74,7 @@ impl PartsceneApp {
         // The 3D view, the graph and the joint colours are designed for a dark background.
         cc.egui_ctx.set_theme(egui::Theme::Dark);
         let mut state = AppState::new(launch.config.clone(), Autosave::at(launch.autosave.clone()));
+        state.platform = launch.platform.clone();
         match (&launch.session, launch.source) {
             (Some(path), _) => state.apply(AppCommand::OpenSession(path.clone())),
             (None, Some(source)) => state.open(source, PinnedEdits::default()),
@@ -137,11 +149,11 @@ impl PartsceneApp {
     /// open it with the labels JSON dropped beside it.
     fn web_dropped_files(&mut self, ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
         let title = self.state.doc.as_ref().map_or_else(|| "partscene".to_owned(), |d| format!("partscene — {}", d.source().title()));
-        crate::web::set_title(&title);
+        self.state.platform.set_title(&title);
         let dropped: Vec<_> = ctx.input(|i| i.raw.dropped_files.clone());
         if !dropped.is_empty() {
             self.web_awaited += dropped.len();
-            crate::web::read_dropped(dropped, self.web_files.0.clone());
+            self.state.platform.read_dropped(dropped, self.web_files.0.clone());
         }
         while let Ok((name, bytes)) = self.web_files.1.try_recv() {
             self.web_pending.insert(name, bytes);

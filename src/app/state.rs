@@ -144,6 +144,8 @@ pub struct AppState {
     pub view_generation: u64,
     /// The reality-gap panel's analysis.
     pub gap: super::gap_panel::GapState,
+    /// The platform's seam (downloads in the browser).
+    pub platform: Arc<dyn super::Platform>,
 }
 
 impl AppState {
@@ -166,6 +168,7 @@ impl AppState {
             session_path: "out/session.json".to_owned(),
             view_generation: 0,
             gap: super::gap_panel::GapState::default(),
+            platform: Arc::new(super::platform::Desktop),
         }
     }
 
@@ -327,8 +330,8 @@ impl AppState {
                 let Some(doc) = &self.doc else { return self.error("nothing to export: no scene is open") };
                 let urdf = crate::export::scene_urdf(doc.model(), &crate::export::UrdfConfig::default());
                 let result = urdf.map_err(|e| e.to_string()).and_then(|urdf| {
-                    crate::web::download("scene.urdf", urdf.as_bytes())?;
-                    crate::web::download("scene.json", crate::export::scene_json(doc.model()).as_bytes())
+                    self.platform.download("scene.urdf", urdf.as_bytes())?;
+                    self.platform.download("scene.json", crate::export::scene_json(doc.model()).as_bytes())
                 });
                 match result {
                     Ok(()) => self.info("downloaded scene.urdf and scene.json"),
