@@ -376,6 +376,39 @@ fn analyze_joint(
     // that makes the held-out replay worse is not reported (it fits how stops or friction are
     // simulated, not missing physics).
     let mut rejected_here = Vec::new();
+    // Whichever way the terms were chosen, each must be something: not a level its own σ cannot
+    // tell from none, and not an effort too small to matter next to the joint's own.
+    let (chosen, confidence) = {
+        let rules = effort::SelectionRules::default();
+        let keep: Vec<bool> = chosen
+            .effects
+            .iter()
+            .zip(&chosen.param_std)
+            .map(|(e, sd)| {
+                // Stops act only at their position: their size is judged where they are found.
+                let sized = !matches!(e.kind, EffectKind::EndStop | EffectKind::Unknown);
+                let share = if sized { effort_share(e, joint, &terms, &derivs, &effort) } else { 1.0 };
+                let keep = !not_material(e, sd, &rules) && share >= rules.min_effort_share;
+                if !keep {
+                    rejected_here.push(format!(
+                        "{}: fitted to {} ({:.1} % of the joint's own effort) — not material, not reported",
+                        e.kind.name(),
+                        e.params.first().map_or_else(|| "nothing".to_owned(), |v| format!("{v:.4}")),
+                        100.0 * share
+                    ));
+                }
+                keep
+            })
+            .collect();
+        if keep.iter().all(|&k| k) {
+            (chosen, confidence)
+        } else {
+            let rest: Vec<Effect> = chosen.effects.iter().zip(&keep).filter(|(_, k)| **k).map(|(e, _)| e.clone()).collect();
+            let conf: Vec<f64> = confidence.iter().zip(&keep).filter(|(_, k)| **k).map(|(c, _)| *c).collect();
+            let refit = if rest.is_empty() { nominal.clone() } else { fit::fit(&problem, &rest, Some(&free_mask(&rest)), None, 25) };
+            (refit, conf)
+        }
+    };
     let mut held = held_out(rec, input, y, sigma, joint, &chosen.effects, t_split);
     let (chosen, confidence) = if given.is_none() && !chosen.effects.is_empty() && held.rmse_after >= held.rmse_before {
         let kinds: Vec<&str> = chosen.effects.iter().map(|e| e.kind.name()).collect();
@@ -504,6 +537,37 @@ fn mostly_at_a_stop(joint: &model::GapJoint, y: &[f64], span: Span) -> bool {
     let vals: Vec<f64> = y[span.start..=span.end].iter().copied().filter(|v| v.is_finite()).collect();
     let near = vals.iter().filter(|&&q| q <= lo + band || q >= hi - band).count();
     2 * near >= vals.len().max(1)
+}
+
+/// RMS effort of effect `e` alone along the measured motion (`derivs`: smoothed position,
+/// velocity, acceleration per sample), over the joint's own dynamic effort there (what its
+/// inertia and the recorded coupling ask, or what is applied beyond holding it against gravity;
+/// on a passive joint, gravity itself): the practical size a term found in position space must
+/// have, measured as effort space measures it.
+fn effort_share(e: &Effect, joint: &model::GapJoint, terms: &[model::JointTerms], derivs: &[[f64; 3]], applied: &[f64]) -> f64 {
+    let (with, without) = (JointPhysics::with_effects(joint, std::slice::from_ref(e)), JointPhysics::nominal(joint));
+    let extra = |p: &JointPhysics, t: &model::JointTerms, [q, v, a]: [f64; 3]| {
+        let friction = if p.friction_shape.transition_speed > 0.0 { p.smooth_friction(v) } else { -p.friction_level(v) * v.signum() };
+        let inertia = (p.mass_scale - 1.0) * (t.inertia * a - t.gravity(q)) + p.armature * a;
+        p.position_effort(q) + p.effort_offset + friction - p.damping_at(q) * v - inertia
+    };
+    let (mut term, mut own, mut count) = (0.0, 0.0f64, 0usize);
+    let mut own_applied = 0.0;
+    for ((t, d), u) in terms.iter().zip(derivs).zip(applied) {
+        if !d.iter().all(|x| x.is_finite()) {
+            continue;
+        }
+        let size = extra(&with, t, *d) - extra(&without, t, *d);
+        term += size * size;
+        own += (t.inertia * d[2] + t.coupling).powi(2);
+        own_applied += (if u.is_finite() { *u } else { 0.0 } - t.gravity(d[0])).powi(2);
+        count += 1;
+    }
+    if count == 0 {
+        return 0.0;
+    }
+    let scale = (own.max(own_applied) / count as f64).sqrt();
+    (term / count as f64).sqrt() / scale.max(1e-12)
 }
 
 /// Whether a refined effect is nothing: a weight change below materiality, or a level within two
