@@ -450,7 +450,11 @@ fn analyze_joint(
         let worst = left.iter().map(|s| rmse_over(&after, *s)).fold(0.0, f64::max);
         // After effort space chose the terms, `unknown` is effort space's (sized in effort
         // units against the joint's own efforts), unless the terms were chosen here.
-        let material = given.is_none() || (fell_back && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma);
+        // And what the named terms leave must matter next to the misfit they were fitted to cut:
+        // a tenth of it is how an engine integrates, not missing physics.
+        let worst_before = spans.iter().map(|s| rmse_over(&residual, *s)).fold(0.0, f64::max);
+        let material = (given.is_none() || (fell_back && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma))
+            && (chosen.effects.is_empty() || worst >= UNKNOWN_SHARE_OF_MISFIT * worst_before);
         if !left.is_empty() && material {
             let ranges: Vec<String> = left.iter().map(|s| format!("{:.2}–{:.2} s", rec.time_s[s.start], rec.time_s[s.end])).collect();
             effects.push(EffectReport {
@@ -525,6 +529,10 @@ fn held_out(
 /// How much better on held-out data a structure chosen in position space must be than the one
 /// effort space chose, to replace it.
 const FALLBACK_HELD_OUT_GAIN: f64 = 2.0;
+
+/// Share of the model-as-written's worst misfit that the worst misfit left after the named terms
+/// must keep for `unknown` (position space).
+const UNKNOWN_SHARE_OF_MISFIT: f64 = 0.1;
 
 /// Residual (in noise σ) that a joint whose terms came from effort space must still show, after
 /// the output-error refinement, for `unknown`.
