@@ -103,6 +103,14 @@ pub struct Decision {
 #[must_use]
 pub fn decide(vocab: &Vocabulary, ctx: &JointContext<'_>) -> Decision {
     match vocab.classify(ctx.label) {
+        // A part named like the object's base that hangs off another part is not the base: its
+        // name says nothing of how it moves (a window's second `body`, its sash).
+        Some(m) if m.class.role == Role::Base => {
+            let mut d = decide_by_geometry(ctx);
+            d.evidence.label_rule =
+                format!("label `{}` names the object's base (class {}), but the part hangs off another: geometry alone", ctx.label, m.class.name);
+            d
+        }
         Some(m) => decide_by_class(vocab, &m, ctx),
         None => decide_by_geometry(ctx),
     }
@@ -326,9 +334,16 @@ fn spinning_disc_axis(p: &Primitive) -> Option<Vec3> {
     (p.size.z <= 0.7 * diameter && axis.dot(UP).abs() < 0.3).then_some(axis)
 }
 
+/// Contact weight from which a parent's contact counts as a full attachment (weights are in
+/// [0, 1]); below it the part barely touches its parent, and the parent it is mounted on may be one
+/// it does not touch in the scan (a latch whose door face was not seen).
+pub const FULL_SUPPORT_WEIGHT: f32 = 0.3;
+
 /// Parent confidence: 1 for a pinned parent, [`CONF_NO_CONTACT_PARENT`] for a part touching
-/// nothing, else `0.5 + 0.5 × margin`, the margin being `(w − w₂) / w` of the chosen parent's
-/// contact weight `w` over the best other candidate's `w₂` (1 when there is none).
+/// nothing, else `0.5 + 0.5 × margin × support`, the margin being `(w − w₂) / w` of the chosen
+/// parent's contact weight `w` over the best other candidate's `w₂` (1 when there is none), the
+/// support `min(1, w / FULL_SUPPORT_WEIGHT)`: being the only part touched is little evidence
+/// when the touch is slight.
 #[must_use]
 pub fn parent_confidence(chosen_weight: Option<f32>, runner_up_weight: Option<f32>, pinned: bool) -> f32 {
     if pinned {
@@ -336,7 +351,8 @@ pub fn parent_confidence(chosen_weight: Option<f32>, runner_up_weight: Option<f3
     }
     let Some(w) = chosen_weight.filter(|w| *w > 0.0) else { return CONF_NO_CONTACT_PARENT };
     let margin = runner_up_weight.map_or(1.0, |w2| ((w - w2) / w).clamp(0.0, 1.0));
-    0.5 + 0.5 * margin
+    let support = (w / FULL_SUPPORT_WEIGHT).min(1.0);
+    0.5 + 0.5 * margin * support
 }
 
 #[cfg(test)]
@@ -402,10 +418,23 @@ mod tests {
     }
 
     #[test]
+    fn a_second_part_named_like_the_base_is_judged_by_its_geometry() {
+        // A window's frame and its sash, both named `body`: the sash is not the base.
+        let frame = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.8, 0.05, 1.0));
+        let sash = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.3), Vec3::new(0.7, 0.03, 0.45));
+        let d = decide(&Vocabulary::builtin(), &ctx("body", &frame, &sash, vec![]));
+        assert_eq!(d.kind, JointKind::Fixed, "{:?}", d.evidence);
+        assert!(d.evidence.label_rule.contains("names the object's base"), "{}", d.evidence.label_rule);
+        assert!(d.evidence.type_confidence < 0.9, "a guess from geometry alone is not confident");
+    }
+
+    #[test]
     fn parent_confidence_follows_the_margin_over_the_next_candidate() {
         assert!((parent_confidence(Some(1.0), None, false) - 1.0).abs() < 1e-6);
         assert!((parent_confidence(Some(1.0), Some(0.5), false) - 0.75).abs() < 1e-6);
         assert!((parent_confidence(None, None, false) - CONF_NO_CONTACT_PARENT).abs() < 1e-6);
         assert!((parent_confidence(Some(0.2), Some(0.9), true) - 1.0).abs() < 1e-6);
+        // The only part touched, but barely: half-way to the full support.
+        assert!((parent_confidence(Some(0.5 * FULL_SUPPORT_WEIGHT), None, false) - 0.75).abs() < 1e-6);
     }
 }
