@@ -163,6 +163,15 @@ add scene_json "${scenes[@]}"
 mapfile -t truths < <(find "$work" \( -name gt.json -o -name '*.gt.json' \) | sort)
 add gt_json "${truths[@]}"
 
+# NumPy scans and MultiScan scenes: the test fixtures written to those formats (a MultiScan input
+# is the face-annotated PLY, the labels separator, then the annotations JSON).
+add scan_npz tests/fixtures/npz/*.npz
+for dir in tests/fixtures/multiscan/*/; do
+  name="$(basename "$dir")"
+  { cat "$dir/$name.ply"; printf '\n#labels#\n'; cat "$dir/$name.annotations.json"; } >"$work/multiscan-$name"
+done
+add multiscan "$work"/multiscan-*
+
 # Sessions: the pins the editor saves, on the parts of the object the session target assembles.
 PARTSCENE_FUZZ_SEED_OUT="$work/sessions" \
   cargo test --locked --quiet --test fuzz_regressions -- --ignored --exact write_session_seeds >/dev/null

@@ -15,6 +15,7 @@ pub mod eval;
 pub mod export;
 pub mod fit;
 pub mod gap;
+pub mod import;
 pub mod io;
 pub mod kinematics;
 pub mod linalg;

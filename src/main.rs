@@ -53,10 +53,10 @@ struct Cli {
 
 #[derive(Subcommand, Clone)]
 enum Command {
-    /// Open the viewer-editor on a scan (.ply), a saved session (.json) or the demo room.
+    /// Open the viewer-editor on a scan (.ply or .npz), a saved session (.json) or the demo room.
     #[cfg(feature = "gui")]
     View {
-        /// A part-segmented scan (.ply) or a saved session (.json); the demo room when absent.
+        /// A part-segmented scan (.ply or .npz) or a saved session (.json); the demo room when absent.
         input: Option<PathBuf>,
         /// Demo room seed (without INPUT).
         #[arg(long, default_value_t = 0)]
@@ -71,7 +71,7 @@ enum Command {
     /// Render a scene to a PNG without a window (wgpu; lavapipe where there is no GPU).
     #[cfg(feature = "gui")]
     Render {
-        /// scene.json, a session (.json), a scan (.ply, reconstructed first) or `demo`.
+        /// scene.json, a session (.json), a scan (.ply or .npz, reconstructed first) or `demo`.
         scene: PathBuf,
         #[arg(long)]
         out: PathBuf,
@@ -105,7 +105,8 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
-    /// Reconstruct a part-segmented scan (PLY + labels JSON beside it).
+    /// Reconstruct a part-segmented scan: a PLY, or a `NumPy` .npz (arrays `points`, `object_ids`,
+    /// `part_ids`, optional `normals` and label arrays), with the labels JSON beside it.
     Reconstruct {
         scan: PathBuf,
         #[arg(long)]
@@ -119,7 +120,7 @@ enum Command {
         /// gt.json written by `demo` (or `scan-asset`).
         #[arg(long)]
         truth: PathBuf,
-        /// The scan, to also run and score the object-level baseline.
+        /// The scan (.ply or .npz), to also run and score the object-level baseline.
         #[arg(long)]
         scan: Option<PathBuf>,
     },
@@ -156,6 +157,11 @@ enum Command {
         category: Option<String>,
         #[arg(long, default_value_t = 0)]
         seed: u64,
+    },
+    /// Convert a scan made by others into a part-segmented scan plus ground truth for `eval`.
+    Import {
+        #[command(subcommand)]
+        source: ImportSource,
     },
     /// Write a scene as MJCF with the physics `partscene gap` fitted (damping, frictionloss,
     /// stiffness/springref, armature, narrowed ranges) on its joints.
@@ -247,6 +253,24 @@ enum Command {
         states: PathBuf,
         #[arg(long)]
         out: PathBuf,
+    },
+}
+
+#[derive(Subcommand, Clone)]
+enum ImportSource {
+    /// A `MultiScan` scan folder (`scene_xxxxx_xx/` with the annotated mesh `scene_xxxxx_xx.ply`
+    /// and `scene_xxxxx_xx.annotations.json`): points drawn on the faces by area, per-point object
+    /// and part ids, labels and truth joints. Writes `OUT/scan.ply`, `OUT/scan.json` and
+    /// `OUT/gt.json`.
+    Multiscan {
+        dir: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        /// Points drawn on the mesh faces (area-weighted, deterministic for a seed).
+        #[arg(long, default_value_t = partscene::import::multiscan::DEFAULT_POINTS)]
+        points: usize,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
     },
 }
 
@@ -371,6 +395,9 @@ fn main() -> Result<()> {
                 (scanner.image_width, scanner.image_height) = (w, h);
             }
             scan_asset_cmd(&asset, &out, &scanner, up.as_deref(), category, seed, cli.json)
+        }
+        Command::Import { source: ImportSource::Multiscan { dir, out, points, seed } } => {
+            import_multiscan_cmd(&dir, &out, points, seed, cli.json)
         }
         Command::Mjcf { scene, effects, out } => mjcf_cmd(&scene, effects.as_deref(), &out),
         Command::Bench { dir, markdown, seed } => bench_cmd(&dir, markdown.as_deref(), seed, &cfg, cli.json),
@@ -584,6 +611,41 @@ fn scan_asset_cmd(
             scan.parts.len()
         );
         println!("wrote {}, {} and {}", out.display(), out.with_extension("json").display(), gt_path.display());
+    }
+    Ok(())
+}
+
+fn import_multiscan_cmd(dir: &Path, out: &Path, points: usize, seed: u64, json: bool) -> Result<()> {
+    use partscene::import::multiscan::{MAX_POINTS, MultiScanOptions, import_multiscan, write_import};
+    anyhow::ensure!((1..=MAX_POINTS).contains(&points), "--points must be between 1 and {MAX_POINTS}, got {points}");
+    let t = Instant::now();
+    let imported = import_multiscan(dir, MultiScanOptions { points, seed })?;
+    let [scan_path, labels_path, gt_path] = write_import(&imported, out)?;
+    let secs = t.elapsed().as_secs_f64();
+    let truth = &imported.truth;
+    let joints: usize = truth.objects.iter().map(|o| o.joints.len()).sum();
+    let movable: usize = truth.objects.iter().flat_map(|o| &o.joints).filter(|j| j.kind.is_movable()).count();
+    if json {
+        println!(
+            "{}",
+            serde_json::json!({"scan": scan_path, "labels": labels_path, "truth": gt_path, "scan_id": imported.scan_id,
+                "points": imported.scan.point_count(), "parts": imported.scan.parts.len(), "objects": truth.objects.len(),
+                "joints": joints, "movable_joints": movable, "warnings": imported.warnings, "seconds": secs})
+        );
+    } else {
+        for w in &imported.warnings {
+            eprintln!("warning: {w}");
+        }
+        println!(
+            "{} ({}): {} points on {} parts of {} objects ({} background), {joints} truth joints ({movable} movable) in {secs:.2} s",
+            dir.display(),
+            imported.scan_id,
+            imported.scan.point_count(),
+            imported.scan.parts.len(),
+            truth.objects.len(),
+            imported.scan.background.len()
+        );
+        println!("wrote {}, {} and {}", scan_path.display(), labels_path.display(), gt_path.display());
     }
     Ok(())
 }

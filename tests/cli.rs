@@ -116,3 +116,47 @@ fn a_damper_found_by_gap_lands_in_the_mjcf() {
     let others = doc.descendants().filter(|n| n.has_tag_name("joint") && n.attribute("name") != Some(door.name.as_str()));
     assert!(others.clone().count() > 5 && others.filter(|n| n.attribute("damping").is_some()).count() == 0);
 }
+
+/// Scans made by others (issue 11): a `MultiScan` folder imported, reconstructed and scored; a
+/// numpy-written `.npz` scan reconstructed; a folder without annotations refused by name.
+#[test]
+fn multiscan_import_and_npz_scans_through_the_cli() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let fixtures = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let out = dir.path().join("ms");
+    let ms = fixtures.join("multiscan/scene_00000_00");
+    let args = ["import", "multiscan", ms.to_str().expect("utf-8"), "--out", out.to_str().expect("utf-8"), "--points", "6000", "--json"];
+    let o = partscene(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("--json prints JSON");
+    assert_eq!((v["parts"].as_u64(), v["objects"].as_u64(), v["movable_joints"].as_u64()), (Some(3), Some(2), Some(1)), "{v}");
+    let rec = dir.path().join("rec");
+    let o = partscene(&["reconstruct", out.join("scan.ply").to_str().expect("utf-8"), "--out", rec.to_str().expect("utf-8")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let scene = rec.join("scene.json");
+    let o =
+        partscene(&["eval", "--scene", scene.to_str().expect("utf-8"), "--truth", out.join("gt.json").to_str().expect("utf-8"), "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["part_level"]["objects"].as_array().map(Vec::len), Some(2), "{v}");
+    assert_eq!(v["part_level"]["summary"]["joints"].as_u64(), Some(1), "{v}");
+
+    let npz = fixtures.join("npz/room_compressed.npz");
+    let o = partscene(&["reconstruct", npz.to_str().expect("utf-8"), "--out", dir.path().join("npz").to_str().expect("utf-8"), "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let o =
+        partscene(&["import", "multiscan", dir.path().to_str().expect("utf-8"), "--out", dir.path().join("x").to_str().expect("utf-8")]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no `*.annotations.json`"), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = partscene(&[
+        "import",
+        "multiscan",
+        ms.to_str().expect("utf-8"),
+        "--out",
+        dir.path().join("y").to_str().expect("utf-8"),
+        "--points",
+        "0",
+    ]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--points"));
+}

@@ -20,7 +20,8 @@ use partscene::export::{DynamicsTable, UrdfConfig, scene_from_json, scene_glb, s
 use partscene::math::DVec3;
 use partscene::model::SceneModel;
 use partscene::pipeline::{FittedParts, FloorHint, PinnedEdits, PipelineConfig, Quiet, assemble, fit_parts, reconstruct};
-use partscene::scan::{MAX_COORDINATE_M, ObjectId, read_scan_bytes};
+use partscene::import::multiscan::{MultiScanOptions, import_multiscan_bytes};
+use partscene::scan::{MAX_COORDINATE_M, ObjectId, Scan, read_scan_bytes, read_scan_npz_bytes};
 use partscene::truth::{GroundTruth, TRUTH_FORMAT, TruthObject, TruthPart};
 use partscene::{eval, gap};
 
@@ -42,6 +43,8 @@ pub const TARGETS: &[(&str, Harness)] = &[
     ("session", session),
     ("scene_json", scene_json_target),
     ("gt_json", gt_json),
+    ("scan_npz", scan_npz),
+    ("multiscan", multiscan),
 ];
 
 /// In a `scan_ply` input, the labels JSON follows the PLY after this line (no such line: the scan
@@ -92,13 +95,56 @@ pub fn scan_ply(data: &[u8]) -> bool {
         None => None,
     };
     let Ok((scan, _warnings)) = read_scan_bytes(ply, "fuzz.ply", labels, "fuzz.json") else { return false };
+    check_and_reconstruct(&scan);
+    true
+}
+
+/// A scan that a reader accepted is within the coordinate limit; up to
+/// [`MAX_RECONSTRUCT_POINTS`] points it is reconstructed and exported.
+fn check_and_reconstruct(scan: &Scan) -> Option<SceneModel> {
     let points = scan.parts.iter().flat_map(|p| &p.points).chain(&scan.background);
     for p in points {
         assert!(p.is_finite() && p.abs().max_element() <= MAX_COORDINATE_M, "the reader let {p} through");
     }
-    if scan.point_count() <= MAX_RECONSTRUCT_POINTS {
-        let scene = reconstruct(&scan, &PipelineConfig::default(), &PinnedEdits::default(), &Quiet);
+    (scan.point_count() <= MAX_RECONSTRUCT_POINTS).then(|| {
+        let scene = reconstruct(scan, &PipelineConfig::default(), &PinnedEdits::default(), &Quiet);
         export_all(&scene);
+        scene
+    })
+}
+
+/// `NumPy` `.npz` bytes (+ labels JSON after [`LABELS_SEPARATOR`]) → scan → as for [`scan_ply`].
+pub fn scan_npz(data: &[u8]) -> bool {
+    let (npz, labels) = split_labels(data);
+    let labels = match labels.map(text) {
+        Some(None) => return false,
+        Some(Some(t)) => Some(t),
+        None => None,
+    };
+    let Ok((scan, _warnings)) = read_scan_npz_bytes(npz, "fuzz.npz", labels, "fuzz.json") else { return false };
+    check_and_reconstruct(&scan);
+    true
+}
+
+/// Points a fuzzed `MultiScan` mesh is sampled into (small: the reader and the conversion are
+/// what is fuzzed, not the pipeline at scale).
+pub const MULTISCAN_POINTS: usize = 1_500;
+
+/// A `MultiScan` face-annotated mesh PLY, then the annotations JSON after [`LABELS_SEPARATOR`] →
+/// scan and ground truth → the scan reconstructed and (up to [`MAX_EVAL_PARTS`] parts) evaluated
+/// against the truth.
+pub fn multiscan(data: &[u8]) -> bool {
+    let (ply, annotations) = split_labels(data);
+    let Some(Some(annotations)) = annotations.map(text) else { return false };
+    let options = MultiScanOptions { points: MULTISCAN_POINTS, seed: 0 };
+    let Ok(import) = import_multiscan_bytes(ply, "fuzz.ply", annotations, "fuzz.annotations.json", "scene_00000_00", options) else {
+        return false;
+    };
+    let scene = check_and_reconstruct(&import.scan);
+    if let Some(scene) = scene
+        && import.truth.objects.iter().map(|o| o.parts.len()).sum::<usize>() <= MAX_EVAL_PARTS
+    {
+        let _ = eval::evaluate(&scene, &import.truth);
     }
     true
 }

@@ -60,7 +60,7 @@ pub fn menu_ui(ui: &mut egui::Ui, state: &mut AppState, panels: &mut PanelState,
     egui::MenuBar::new().ui(ui, |ui| {
         ui.menu_button("File", |ui| {
             if ui.button("Open scan…").clicked() {
-                if let Some(path) = pick_file("Part-segmented scan", &["ply"]) {
+                if let Some(path) = pick_file("Part-segmented scan", &["ply", "npz"]) {
                     commands.push(AppCommand::Open(SceneSource::Scan { path }));
                 }
                 ui.close();

@@ -38,7 +38,7 @@ pub enum ShotError {
     Render(#[from] RenderError),
     #[error(transparent)]
     Open(#[from] EditError),
-    #[error("{path}: expected a scene.json, a session (.json), a scan (.ply) or `demo`: {message}")]
+    #[error("{path}: expected a scene.json, a session (.json), a scan (.ply or .npz) or `demo`: {message}")]
     Input { path: String, message: String },
 }
 
@@ -55,7 +55,7 @@ fn load(input: &Path, config: &PipelineConfig) -> Result<Loaded, ShotError> {
     }
     let ext = input.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     match ext.as_str() {
-        "ply" => {
+        "ply" | "npz" => {
             let doc = Document::open(SceneSource::Scan { path: input.to_owned() }, config.clone(), PinnedEdits::default(), &Quiet)?;
             Ok(Loaded::Document(Box::new(doc)))
         }

@@ -68,9 +68,37 @@ pub enum ScanError {
 
     /// The labels name a part that has no points in the PLY.
     #[error(
-        "{file}: the labels name part {part}, which is not in the scan {ply}; expected only part ids that occur in the PLY's `part` property"
+        "{file}: the labels name part {part}, which is not in the scan {ply}; expected only part ids that occur in the scan's `part` property (PLY) or `part_ids` array (.npz)"
     )]
     UnknownLabelPart { file: String, part: PartId, ply: String },
+
+    /// Not a zip archive, or a member of it cannot be read.
+    #[error("{file}: not a readable NumPy .npz archive (a zip of .npy arrays, as numpy.savez writes): {detail}")]
+    Npz { file: String, detail: String },
+
+    /// A required array is not in the archive.
+    #[error("{file}: no array `{array}` in the .npz (it holds: {found}); expected {expected}")]
+    NpzMissingArray { file: String, array: &'static str, found: String, expected: &'static str },
+
+    /// An array has the wrong dtype, shape or length, or holds a value that cannot be used.
+    #[error("{file}: array `{array}` {detail}; expected {expected}")]
+    NpzArray { file: String, array: String, detail: String, expected: String },
+
+    /// A point coordinate is NaN or infinite (or a float64 beyond the `f32` range).
+    #[error("{file}: array `points` row {row} has a non-finite {axis} ({value}); expected finite coordinates within the f32 range")]
+    NpzNonFinite { file: String, row: usize, axis: &'static str, value: String },
+
+    /// A point coordinate is beyond any room (see `scan::ply::MAX_COORDINATE_M`).
+    #[error(
+        "{file}: array `points` row {row} has {axis} = {value:e} m; expected |{axis}| <= {limit:e} m (a room-scale scan; check the units)"
+    )]
+    NpzOutOfRange { file: String, row: usize, axis: &'static str, value: f64, limit: f32 },
+
+    /// Labels both inside the archive and in a labels file beside it.
+    #[error(
+        "{file}: the archive holds labels (`label_part_ids`/`label_names` or `category_object_ids`/`category_names`) and {labels} exists beside it; expected one source of labels (remove one)"
+    )]
+    LabelsTwice { file: String, labels: String },
 
     /// A scan to be written has an id the PLY `int` type cannot hold.
     #[error("{file}: cannot write {what} {id}; expected ids within the 32-bit signed range")]

@@ -1,5 +1,5 @@
 //! Part-segmented scans (`../shared/spec/scan-format.md`): the in-memory type, and the only place
-//! that reads or writes them (PLY + labels JSON).
+//! that reads or writes them (PLY + labels JSON; `NumPy` `.npz` archives are read too, see `npz.rs`).
 
 use std::collections::BTreeMap;
 
@@ -7,6 +7,12 @@ use crate::math::Vec3;
 
 mod error;
 mod labels;
+mod npy;
+mod npz;
+#[cfg(test)]
+// Tests: a failed unwrap is the failure report.
+#[allow(clippy::unwrap_used)]
+mod npz_tests;
 mod ply;
 mod read;
 #[cfg(test)]
@@ -17,8 +23,11 @@ mod write;
 
 pub use error::ScanError;
 pub use labels::labels_json;
+pub use npz::MAX_INFLATED_BYTES;
 pub use ply::MAX_COORDINATE_M;
-pub use read::{UNASSIGNED, UNKNOWN_CATEGORY, UNKNOWN_LABEL, read_scan, read_scan_bytes};
+/// PLY helpers shared with the mesh importers (`crate::import`).
+pub(crate) use ply::{check_element_length, one_line, type_name};
+pub use read::{UNASSIGNED, UNKNOWN_CATEGORY, UNKNOWN_LABEL, is_npz_path, read_scan, read_scan_bytes, read_scan_npz_bytes};
 pub use write::{scan_to_ply_bytes, write_scan};
 
 /// A part instance id as written in the scan (`part` property); unique in the file.

@@ -154,7 +154,7 @@ pub(crate) fn read_vertices(bytes: &[u8], file: &str, warnings: &mut Vec<Warning
 const MAX_DETAIL_CHARS: usize = 300;
 
 /// The parser's multi-line message on one line, shortened.
-fn one_line(e: &ParseError) -> String {
+pub(crate) fn one_line(e: &ParseError) -> String {
     let text = e.to_string();
     let mut out = text.split(['\n', '\t', '\r']).map(str::trim).filter(|s| !s.is_empty()).collect::<Vec<_>>().join(" ");
     if let Some((cut, _)) = out.char_indices().nth(MAX_DETAIL_CHARS) {
@@ -164,7 +164,7 @@ fn one_line(e: &ParseError) -> String {
     out
 }
 
-fn type_name(data_type: &PropertyType) -> String {
+pub(crate) fn type_name(data_type: &PropertyType) -> String {
     fn scalar(s: &ScalarType) -> &'static str {
         match s {
             ScalarType::Char => "char",
@@ -271,7 +271,7 @@ fn min_element_bytes(def: &ElementDef, encoding: Encoding) -> usize {
 /// size: a count the file cannot hold is refused before the parser loops over it. Returns
 /// whether the element has to be parsed at all: a binary element without properties takes no
 /// bytes, so any count of it is skipped at once instead of counted through one by one.
-fn check_element_length(def: &ElementDef, encoding: Encoding, rest: usize, file: &str) -> Result<bool, ScanError> {
+pub(crate) fn check_element_length(def: &ElementDef, encoding: Encoding, rest: usize, file: &str) -> Result<bool, ScanError> {
     let min_bytes = min_element_bytes(def, encoding);
     if min_bytes == 0 {
         return Ok(false);

@@ -1,4 +1,4 @@
-//! Reading a scan: the PLY's vertices grouped by part, with the labels JSON beside it.
+//! Reading a scan: the PLY's vertices (or the `.npz` arrays) grouped by part, with the labels.
 
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
@@ -6,6 +6,7 @@ use std::path::Path;
 
 use super::error::ScanError;
 use super::labels::{Labels, parse_labels};
+use super::npz::read_npz;
 use super::ply::{RawVertex, read_vertices};
 use super::{ObjectId, PartId, Scan, ScanObject, ScanPart};
 use crate::math::Vec3;
@@ -20,13 +21,25 @@ pub const UNKNOWN_LABEL: &str = "unknown";
 /// Category of an object the labels file does not name.
 pub const UNKNOWN_CATEGORY: &str = "object";
 
-/// Reads `NAME.ply` and the labels `NAME.json` beside it (see `read_scan_bytes` for the rules).
-/// A missing labels file is a warning, not an error.
-pub fn read_scan(ply_path: &Path) -> Result<(Scan, Vec<Warning>), ScanError> {
-    let ply = crate::io::read_bytes(ply_path)?;
-    let labels_path = ply_path.with_extension("json");
+/// Reads a scan, `NAME.ply` or `NAME.npz` (`NumPy` arrays, see [`read_scan_npz_bytes`]), and the
+/// labels `NAME.json` beside it (see [`read_scan_bytes`] for the rules). A missing labels file is a
+/// warning, not an error.
+pub fn read_scan(path: &Path) -> Result<(Scan, Vec<Warning>), ScanError> {
+    let bytes = crate::io::read_bytes(path)?;
+    let labels_path = path.with_extension("json");
     let labels = crate::io::read_optional_string(&labels_path)?;
-    read_scan_bytes(&ply, &ply_path.display().to_string(), labels.as_deref(), &labels_path.display().to_string())
+    let (name, labels_name) = (path.display().to_string(), labels_path.display().to_string());
+    if is_npz_path(path) {
+        read_scan_npz_bytes(&bytes, &name, labels.as_deref(), &labels_name)
+    } else {
+        read_scan_bytes(&bytes, &name, labels.as_deref(), &labels_name)
+    }
+}
+
+/// Whether a scan path names a `NumPy` archive (`.npz`, any case) rather than a PLY.
+#[must_use]
+pub fn is_npz_path(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("npz"))
 }
 
 /// Reads a scan from memory: `ply` is the PLY file, `labels_json` the labels file (`None` when it
@@ -44,36 +57,71 @@ pub fn read_scan_bytes(
 ) -> Result<(Scan, Vec<Warning>), ScanError> {
     let mut warnings = Vec::new();
     let ply_data = read_vertices(ply, ply_name, &mut warnings)?;
-    let labels = if let Some(text) = labels_json {
-        Some(parse_labels(text, labels_name)?)
-    } else {
-        warnings.push(Warning::new(
-            "scan",
-            labels_name,
-            "labels file not found: every part is labelled \"unknown\" and every object \"object\"",
-        ));
-        None
+    let labels = sidecar_labels(labels_json, labels_name, &mut warnings)?;
+    assemble(&ply_data.vertices, ply_data.has_normals, labels.as_ref(), ply_name, labels_name, warnings)
+}
+
+/// Reads a `.npz` scan from memory (arrays `points`, `object_ids`, `part_ids`, optional
+/// `normals` and label arrays: `scan::npz`), with the same rules as [`read_scan_bytes`]. Labels come
+/// from the archive's label arrays or from `labels_json` (the file beside it), not both.
+pub fn read_scan_npz_bytes(
+    npz: &[u8],
+    npz_name: &str,
+    labels_json: Option<&str>,
+    labels_name: &str,
+) -> Result<(Scan, Vec<Warning>), ScanError> {
+    let mut warnings = Vec::new();
+    let data = read_npz(npz, npz_name)?;
+    let (labels, labels_source) = match (data.labels, labels_json) {
+        (Some(_), Some(_)) => return Err(ScanError::LabelsTwice { file: npz_name.to_owned(), labels: labels_name.to_owned() }),
+        (Some(labels), None) => (Some(labels), format!("{npz_name} (label arrays)")),
+        (None, json) => (sidecar_labels(json, labels_name, &mut warnings)?, labels_name.to_owned()),
     };
-    let mut groups = group_by_part(&ply_data.vertices, ply_data.has_normals, &mut warnings, ply_name);
-    if let Some(labels) = &labels
+    assemble(&data.vertices, data.has_normals, labels.as_ref(), npz_name, &labels_source, warnings)
+}
+
+/// The labels file beside a scan, parsed; a warning when there is none.
+fn sidecar_labels(labels_json: Option<&str>, labels_name: &str, warnings: &mut Vec<Warning>) -> Result<Option<Labels>, ScanError> {
+    if let Some(text) = labels_json {
+        return parse_labels(text, labels_name).map(Some);
+    }
+    warnings.push(Warning::new(
+        "scan",
+        labels_name,
+        "labels file not found: every part is labelled \"unknown\" and every object \"object\"",
+    ));
+    Ok(None)
+}
+
+/// Groups the points by part and applies the labels (`labels_name` names their source in errors).
+fn assemble(
+    vertices: &[RawVertex],
+    has_normals: bool,
+    labels: Option<&Labels>,
+    scan_name: &str,
+    labels_name: &str,
+    mut warnings: Vec<Warning>,
+) -> Result<(Scan, Vec<Warning>), ScanError> {
+    let mut groups = group_by_part(vertices, has_normals, &mut warnings, scan_name);
+    if let Some(labels) = labels
         && let Some(&part) = labels.parts.keys().find(|&&id| groups.parts.binary_search_by_key(&id, |g| g.id).is_err())
     {
-        return Err(ScanError::UnknownLabelPart { file: labels_name.to_owned(), part, ply: ply_name.to_owned() });
+        return Err(ScanError::UnknownLabelPart { file: labels_name.to_owned(), part, ply: scan_name.to_owned() });
     }
 
-    let mut scan = Scan { source: ply_name.to_owned(), ..Scan::default() };
+    let mut scan = Scan { source: scan_name.to_owned(), ..Scan::default() };
     scan.background = std::mem::take(&mut groups.background);
     for group in groups.parts.drain(..) {
-        let Some(part) = build_part(group, labels.as_ref(), &mut warnings, &mut scan.background) else {
+        let Some(part) = build_part(group, labels, &mut warnings, &mut scan.background) else {
             continue;
         };
         scan.objects
             .entry(part.object)
-            .or_insert_with(|| ScanObject { id: part.object, category: object_category(part.object, labels.as_ref(), &mut warnings) });
+            .or_insert_with(|| ScanObject { id: part.object, category: object_category(part.object, labels, &mut warnings) });
         scan.parts.push(part);
     }
     if scan.parts.is_empty() {
-        warnings.push(Warning::new("scan", ply_name, "the scan has no parts: every point is background"));
+        warnings.push(Warning::new("scan", scan_name, "the scan has no parts: every point is background"));
     }
     Ok((scan, warnings))
 }

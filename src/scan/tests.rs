@@ -108,7 +108,7 @@ fn ascii_round_trip_through_bytes() {
     assert_same(&scan, &again);
 }
 
-fn assert_same(a: &Scan, b: &Scan) {
+pub(super) fn assert_same(a: &Scan, b: &Scan) {
     assert_eq!(a.objects, b.objects);
     assert_eq!(a.background, b.background);
     assert_eq!(a.parts.len(), b.parts.len());
