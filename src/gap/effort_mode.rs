@@ -321,7 +321,7 @@ fn joint_outcome(
         .zip(&f.confidence)
         .zip(&f.effect_rms)
         .map(|(((e, sd), c), size)| {
-            let mut r = effect_report(joint, &terms, gravity, e, sd, *c);
+            let mut r = effect_report(joint, &terms, gravity, e, sd, *c, super::observed_range(y));
             let _ = write!(
                 r.description,
                 " — {size:.4} {force} RMS over the motion, {:.0} % of the joint's own effort",

@@ -429,7 +429,7 @@ fn analyze_joint(
         .iter()
         .zip(&chosen.param_std)
         .zip(&confidence)
-        .map(|((e, sd), c)| effect_report(joint, &terms[0], gravity, e, sd, *c))
+        .map(|((e, sd), c)| effect_report(joint, &terms[0], gravity, e, sd, *c, observed_range(y)))
         .collect();
     if let Some(g) = given.filter(|_| !fell_back) {
         // Effort space's `unknown` stands when the exact simulation confirms that the motion is
@@ -497,6 +497,11 @@ fn analyze_joint(
 /// friction, soft stops; a real mechanism), and that difference biases a level by more than the
 /// data's noise does. Measured on the cross-engine suite; reported as part of each σ.
 const MODEL_FORM_FLOOR: f64 = 0.1;
+
+/// The same for positions (a spring's rest, a tilt's equilibrium, a stop, a soft-close zone), as
+/// a share of the joint's observed range of motion: where a position lies is known only as well
+/// as the motion around it is modelled.
+const POSITION_MODEL_FORM_SHARE: f64 = 0.02;
 
 /// Parameters that are positions (no relative floor).
 const POSITION_PARAMS: [&str; 4] = ["rest_position", "equilibrium_position", "position", "engage_position"];
@@ -676,6 +681,14 @@ fn describe_mismatch(rec: &Recording, joint: &model::GapJoint, y: &[f64], derivs
     }
 }
 
+/// The range of the finite values of `y` (0 when there are none).
+fn observed_range(y: &[f64]) -> f64 {
+    let (lo, hi) = y.iter().filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    if hi >= lo { hi - lo } else { 0.0 }
+}
+
+/// The report of one effect; `range` is the joint's observed range of motion (position σ floor).
+#[allow(clippy::too_many_arguments)]
 fn effect_report(
     joint: &model::GapJoint,
     terms: &model::JointTerms,
@@ -683,6 +696,7 @@ fn effect_report(
     e: &Effect,
     sd: &[f64],
     confidence: f64,
+    range: f64,
 ) -> EffectReport {
     let rot = joint.kind.is_rotational();
     let (force, length) = if rot { ("N·m", "rad") } else { ("N", "m") };
@@ -691,14 +705,9 @@ fn effect_report(
     let mut unc = std::collections::BTreeMap::new();
     let mut put = |k: &str, v: f64, s: f64| {
         params.insert(k.to_owned(), v);
-        // Levels carry the model-form floor; positions keep their statistical σ.
-        let floor = if POSITION_PARAMS.contains(&k) {
-            0.0
-        } else if k == "scale" {
-            MODEL_FORM_FLOOR * (v - 1.0).abs()
-        } else {
-            MODEL_FORM_FLOOR * v.abs()
-        };
+        // Levels (a weight scale too: the weight is the level) carry the model-form floor,
+        // positions a share of the observed motion.
+        let floor = if POSITION_PARAMS.contains(&k) { POSITION_MODEL_FORM_SHARE * range } else { MODEL_FORM_FLOOR * v.abs() };
         if s.is_finite() {
             unc.insert(k.to_owned(), s.hypot(floor));
         }
