@@ -440,6 +440,10 @@ mod tests {
         check("drawer1_top", Some(("drawer", Prismatic)));
         check("sliding", None);
         check("cupboard", Some(("body", Fixed)));
+        // A lock is a latch, mounted on what it locks (not a lever on the body).
+        check("door_lock", Some(("latch", Revolute)));
+        check("lock_link", Some(("latch", Revolute)));
+        check("latch", Some(("latch", Revolute)));
     }
 
     #[test]

@@ -313,6 +313,26 @@ mod tests {
     }
 
     #[test]
+    fn a_latch_touching_the_frame_more_than_its_door_hangs_on_the_door() {
+        // A door closed in its frame; the latch sits at the door's free edge, its back face half on
+        // the door's front face and half on the frame post beside it.
+        let frame = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.1, 0.1, 1.0));
+        let door = Primitive::cuboid_at(Vec3::new(0.45, -0.03, 0.5), Vec3::new(0.8, 0.04, 1.0));
+        let latch = Primitive::cuboid_at(Vec3::new(0.04, -0.07, 0.5), Vec3::new(0.12, 0.04, 0.04));
+        let view = [
+            TreePart { id: 1, label: "frame", primitive: &frame },
+            TreePart { id: 2, label: "door", primitive: &door },
+            TreePart { id: 3, label: "latch", primitive: &latch },
+        ];
+        let cfg = TreeConfig::default();
+        let from_frame = crate::contact::contact(&frame, &latch, &cfg.contact).expect("frame contact").weight;
+        let from_door = crate::contact::contact(&door, &latch, &cfg.contact).expect("door contact").weight;
+        assert!(from_frame > from_door, "the frame must touch more: {from_frame} vs {from_door}");
+        let (tree, _) = build_part_tree(&view, &cfg, &Vocabulary::builtin(), &BTreeMap::new());
+        assert_eq!(tree.parent.get(&3), Some(&2), "{:?}", tree.parent);
+    }
+
+    #[test]
     fn a_part_touching_nothing_goes_to_its_typical_parent_before_the_nearest_part() {
         // A bed whose frame was seen only over its foot half: the headboard (x ≈ 0) touches
         // nothing; the mattress is 8 cm away, the frame 80 cm.
