@@ -114,6 +114,24 @@ fn scene_json_round_trips() {
     assert!(scene_from_json("{\"format\": \"x\"}", "bad.json").is_err());
 }
 
+/// A `scene.json` edited into a broken state is refused with the field and the part it names
+/// (fuzzing found a support part that did not exist panicking the MJCF export).
+#[test]
+fn a_scene_json_with_a_dangling_reference_is_refused_with_the_field_named() {
+    fn check(edit: impl Fn(&mut serde_json::Value), expected: &str) {
+        let mut v: serde_json::Value = serde_json::from_str(&scene_json(&scene())).expect("json");
+        edit(&mut v);
+        let err = scene_from_json(&v.to_string(), "room/scene.json").expect_err("a broken reference");
+        assert_eq!(err.to_string(), expected);
+    }
+    check(|v| v["parts"][1]["id"] = 1.into(), "room/scene.json: parts: part id 1 appears more than once");
+    check(|v| v["joints"][0]["child"] = 99.into(), "room/scene.json: joints[0].child: part 99 is not among the scene's parts");
+    check(
+        |v| v["objects"][0]["supported_by_part"] = 77.into(),
+        "room/scene.json: objects[0].supported_by_part: part 77 is not among the scene's parts",
+    );
+}
+
 #[cfg(feature = "sim")]
 #[test]
 fn urdf_loads_into_rapier_as_a_multibody() {

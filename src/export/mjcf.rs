@@ -363,7 +363,8 @@ fn contact_excludes(scene: &SceneModel, tree: &ExportTree) -> Vec<(PartId, PartI
                 add(a, b);
             }
         }
-        if let Some(support) = obj.supported_by_part {
+        // A support the scene does not hold (an edited or hand-written scene) has no body.
+        if let Some(support) = obj.supported_by_part.filter(|s| tree.name.contains_key(s)) {
             for &a in &ids {
                 add(a, support);
             }

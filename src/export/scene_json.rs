@@ -50,6 +50,9 @@ pub enum SceneJsonError {
     Format { path: String, found: String },
     #[error("{path}: cannot read: {source}")]
     Io { path: String, source: std::io::Error },
+    /// The document parsed but refers to something it does not hold (or holds twice).
+    #[error("{path}: {field}: {problem}")]
+    Reference { path: String, field: String, problem: String },
 }
 
 /// `scene.json` text of a scene.
@@ -103,6 +106,8 @@ pub fn scene_from_json(text: &str, path: &str) -> Result<SceneModel, SceneJsonEr
         })
         .collect();
     parts.sort_by_key(|p| p.id);
+    let reference = |field: String, problem: String| SceneJsonError::Reference { path: path.to_owned(), field, problem };
+    check_references(&parts, &doc.joints, &doc.objects).map_err(|(field, problem)| reference(field, problem))?;
     Ok(SceneModel {
         source: doc.source,
         parts,
@@ -115,6 +120,29 @@ pub fn scene_from_json(text: &str, path: &str) -> Result<SceneModel, SceneJsonEr
         warnings: doc.warnings,
         skipped_parts: doc.skipped_parts,
     })
+}
+
+/// The references a scene's exporters and editor rely on: part ids are unique, every joint joins
+/// two parts of the document, and an object stands on a part the document holds. Returns the
+/// field and the problem of the first breach (parts sorted by id).
+fn check_references(parts: &[PartModel], joints: &[Joint], objects: &[ObjectModel]) -> Result<(), (String, String)> {
+    if let Some(w) = parts.windows(2).find(|w| w[0].id == w[1].id) {
+        return Err(("parts".to_owned(), format!("part id {} appears more than once", w[0].id)));
+    }
+    let known = |id: PartId| parts.binary_search_by_key(&id, |p| p.id).is_ok();
+    for (i, j) in joints.iter().enumerate() {
+        for (end, id) in [("parent", j.parent), ("child", j.child)] {
+            if !known(id) {
+                return Err((format!("joints[{i}].{end}"), format!("part {id} is not among the scene's parts")));
+            }
+        }
+    }
+    for (i, o) in objects.iter().enumerate() {
+        if let Some(support) = o.supported_by_part.filter(|s| !known(*s)) {
+            return Err((format!("objects[{i}].supported_by_part"), format!("part {support} is not among the scene's parts")));
+        }
+    }
+    Ok(())
 }
 
 /// Reads `scene.json` from a file.

@@ -459,7 +459,8 @@ impl<'a> EffortProblem<'a> {
             let z = &me.size;
             let applied = &sig.effort_size[d];
             let rms_of = |f: &dyn Fn(usize) -> f64| rms((0..n).filter(|&i| ok[i]).map(f));
-            let scale = rms_of(&|i| applied.as_ref().map_or(0.0, |e| e[i]) - z.gravity[d][i]).max(rms_of(&|i| z.tau[d][i] - z.gravity[d][i]));
+            let scale =
+                rms_of(&|i| applied.as_ref().map_or(0.0, |e| e[i]) - z.gravity[d][i]).max(rms_of(&|i| z.tau[d][i] - z.gravity[d][i]));
             rows.push(RowInfo { joint: j, dof: d, residual, effort_rms: scale });
             used.push(ok);
         }
@@ -639,9 +640,8 @@ impl EffortProblem<'_> {
         }
         rows.get(&r)?;
         let d = self.rows[r].dof;
-        let size = (0..n)
-            .map(|i| if self.used[r][i] { part_of[r].iter().map(|b| me.size.body_tau[b][d][i]).sum() } else { f64::NAN })
-            .collect();
+        let size =
+            (0..n).map(|i| if self.used[r][i] { part_of[r].iter().map(|b| me.size.body_tau[b][d][i]).sum() } else { f64::NAN }).collect();
         self.columns.push(Column { rows, size });
         Some(Candidate {
             row: r,
@@ -803,9 +803,7 @@ impl EffortProblem<'_> {
     fn change_rms(&self, c: usize, theta: &BTreeMap<usize, f64>, replaced: Option<(usize, &BTreeMap<usize, f64>)>) -> f64 {
         let row = self.candidates[c].row;
         let n = self.rows[row].residual.len();
-        rms((0..n)
-            .filter(|&i| self.used[row][i])
-            .map(|i| self.term_at(c, theta, i) - replaced.map_or(0.0, |(r, t)| self.term_at(r, t, i))))
+        rms((0..n).filter(|&i| self.used[row][i]).map(|i| self.term_at(c, theta, i) - replaced.map_or(0.0, |(r, t)| self.term_at(r, t, i))))
     }
 
     /// The member of c's family on c's joint in `set`, other than c.

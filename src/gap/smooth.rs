@@ -85,8 +85,7 @@ impl Smoother {
                 }
                 let lo = times.partition_point(|&t| t < t0 - reach);
                 let hi = times.partition_point(|&t| t <= t0 + reach);
-                let raw: Vec<(usize, f64)> =
-                    (lo..hi).map(|k| (idx[k], (-0.5 * ((times[k] - t0) / sigma_s).powi(2)).exp())).collect();
+                let raw: Vec<(usize, f64)> = (lo..hi).map(|k| (idx[k], (-0.5 * ((times[k] - t0) / sigma_s).powi(2)).exp())).collect();
                 let total: f64 = raw.iter().map(|(_, w)| w).sum();
                 if total <= 0.0 {
                     return Vec::new();
@@ -100,10 +99,7 @@ impl Smoother {
     /// The filtered signal: NaN where no sample is in reach or a value in reach is not finite.
     #[must_use]
     pub fn apply(&self, y: &[f64]) -> Vec<f64> {
-        self.weights
-            .iter()
-            .map(|w| if w.is_empty() { f64::NAN } else { w.iter().map(|&(i, c)| c * y[i]).sum() })
-            .collect()
+        self.weights.iter().map(|w| if w.is_empty() { f64::NAN } else { w.iter().map(|&(i, c)| c * y[i]).sum() }).collect()
     }
 }
 

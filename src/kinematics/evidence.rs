@@ -107,8 +107,10 @@ pub fn decide(vocab: &Vocabulary, ctx: &JointContext<'_>) -> Decision {
         // name says nothing of how it moves (a window's second `body`, its sash).
         Some(m) if m.class.role == Role::Base => {
             let mut d = decide_by_geometry(ctx);
-            d.evidence.label_rule =
-                format!("label `{}` names the object's base (class {}), but the part hangs off another: geometry alone", ctx.label, m.class.name);
+            d.evidence.label_rule = format!(
+                "label `{}` names the object's base (class {}), but the part hangs off another: geometry alone",
+                ctx.label, m.class.name
+            );
             d
         }
         Some(m) => decide_by_class(vocab, &m, ctx),
