@@ -100,6 +100,10 @@ enum Command {
         /// Scan with the clean complete setting (all around, no noise) instead of a partial scan.
         #[arg(long)]
         clean: bool,
+        /// Instead of the demo room, the benchmarks' open floor of furnished bays, with at least
+        /// this many parts (`benches/` use 150).
+        #[arg(long)]
+        min_parts: Option<usize>,
         /// Write scan, ground truth, scene.urdf, scene.json and eval.json here
         /// (one sub-folder per seed when --count > 1).
         #[arg(long)]
@@ -184,6 +188,10 @@ enum Command {
         markdown: Option<PathBuf>,
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Also write each object's reconstruction from the clean scan here, one folder per
+        /// asset (`scene.urdf`, `scene.srdf`, `objects/`, `scene_objects.json`, ...).
+        #[arg(long, value_name = "DIR")]
+        export: Option<PathBuf>,
     },
     /// Reality gap: compare a recording of the real object with simulation of the model, locate
     /// mismatches, find and fit the missing physics; writes report.json, model.fitted.urdf,
@@ -357,7 +365,7 @@ fn main() -> Result<()> {
     #[cfg(feature = "gui")]
     let default = Command::View { input: None, seed: 0, clean: false, no_autosave: false };
     #[cfg(not(feature = "gui"))]
-    let default = Command::Demo { seed: 0, count: 1, clean: false, out: Some(PathBuf::from("out/demo")) };
+    let default = Command::Demo { seed: 0, count: 1, clean: false, min_parts: None, out: Some(PathBuf::from("out/demo")) };
     let command = cli.command.clone().unwrap_or(default);
     match command {
         #[cfg(feature = "gui")]
@@ -366,7 +374,9 @@ fn main() -> Result<()> {
         Command::Render { scene, out, view, width, height, fit_error, open } => {
             render_cmd(&scene, &out, &view, [width, height], fit_error, open, &cfg, cli.json)
         }
-        Command::Demo { seed, count, clean, out } => demo(seed, count, clean, out.as_deref(), &cfg, cli.json, &*observer(&cli)?),
+        Command::Demo { seed, count, clean, min_parts, out } => {
+            demo(DemoRooms { seed, count, clean, min_parts }, out.as_deref(), &cfg, cli.json, &*observer(&cli)?)
+        }
         Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, &cfg, cli.json, &*observer(&cli)?),
         Command::Eval { scene, truth, scan } => eval_cmd(&scene, &truth, scan.as_deref(), cli.json),
         Command::ScanAsset { asset, out, clean, viewpoints, noise, strays, outliers, image, up, category, seed } => {
@@ -400,7 +410,7 @@ fn main() -> Result<()> {
             import_multiscan_cmd(&dir, &out, points, seed, cli.json)
         }
         Command::Mjcf { scene, effects, out } => mjcf_cmd(&scene, effects.as_deref(), &out),
-        Command::Bench { dir, markdown, seed } => bench_cmd(&dir, markdown.as_deref(), seed, &cfg, cli.json),
+        Command::Bench { dir, markdown, seed, export } => bench_cmd(&dir, markdown.as_deref(), seed, export, &cfg, cli.json),
         Command::Gap { model, recording, out } => gap_cmd(model.as_deref(), &recording, &out, cli.json),
         Command::GapBench {
             dir,
@@ -512,11 +522,39 @@ fn eval_cmd(scene_path: &Path, truth_path: &Path, scan_path: Option<&Path>, json
     Ok(())
 }
 
-fn demo(seed: u64, count: u64, clean: bool, out: Option<&Path>, cfg: &PipelineConfig, json: bool, observer: &dyn Observer) -> Result<()> {
+/// Which generated rooms `partscene demo` reconstructs.
+#[derive(Clone, Copy)]
+struct DemoRooms {
+    seed: u64,
+    count: u64,
+    clean: bool,
+    /// The large open floor of `synth::large_scene` with at least this many parts.
+    min_parts: Option<usize>,
+}
+
+impl DemoRooms {
+    fn generate(&self, seed: u64) -> (partscene::truth::GroundTruth, partscene::scan::Scan) {
+        use partscene::synth::{ScannerConfig, large_scene, scan};
+        match self.min_parts {
+            Some(n) => {
+                let truth = large_scene(seed, n);
+                let scanner = if self.clean { ScannerConfig::clean_complete() } else { ScannerConfig::default() };
+                let mut scan = scan(&truth, &scanner, seed);
+                scan.source = format!("large scene seed {seed}, at least {n} parts");
+                (truth, scan)
+            }
+            None if self.clean => partscene::synth::demo_clean(seed),
+            None => partscene::synth::demo(seed),
+        }
+    }
+}
+
+fn demo(rooms: DemoRooms, out: Option<&Path>, cfg: &PipelineConfig, json: bool, observer: &dyn Observer) -> Result<()> {
     let mut runs = Vec::new();
-    for s in seed..seed + count.max(1) {
+    let count = rooms.count;
+    for s in rooms.seed..rooms.seed + count.max(1) {
         let t = Instant::now();
-        let (truth, scan) = if clean { partscene::synth::demo_clean(s) } else { partscene::synth::demo(s) };
+        let (truth, scan) = rooms.generate(s);
         let scan_secs = t.elapsed().as_secs_f64();
         let bars = Bars::new(!json, "parts");
         let t = Instant::now();
@@ -650,8 +688,15 @@ fn import_multiscan_cmd(dir: &Path, out: &Path, points: usize, seed: u64, json: 
     Ok(())
 }
 
-fn bench_cmd(dir: &Path, markdown: Option<&Path>, seed: u64, pipeline: &PipelineConfig, json: bool) -> Result<()> {
-    let cfg = bench::BenchConfig { pipeline: pipeline.clone(), seed, ..bench::BenchConfig::default() };
+fn bench_cmd(
+    dir: &Path,
+    markdown: Option<&Path>,
+    seed: u64,
+    export_dir: Option<PathBuf>,
+    pipeline: &PipelineConfig,
+    json: bool,
+) -> Result<()> {
+    let cfg = bench::BenchConfig { pipeline: pipeline.clone(), seed, export_dir, ..bench::BenchConfig::default() };
     let bars = Bars::new(!json, "assets");
     let progress = |done: usize, total: usize, name: &str| bars.update(name, done, total);
     let report = bench::bench_dir(dir, &cfg, &progress)?;

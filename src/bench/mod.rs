@@ -23,6 +23,9 @@ pub enum BenchError {
     Asset(Box<crate::assets::AssetError>),
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
+    /// The reconstruction could not be exported (`--export`).
+    #[error("asset `{asset}`: cannot export the reconstruction: {source}")]
+    Export { asset: String, source: Box<crate::export::ExportError> },
     /// The asset has no link with geometry.
     #[error("asset `{asset}`: no link has geometry to scan")]
     NoGeometry { asset: String },

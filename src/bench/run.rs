@@ -33,12 +33,27 @@ pub struct BenchConfig {
     pub clean: ScannerConfig,
     pub pipeline: PipelineConfig,
     pub seed: u64,
+    /// Where to write each object's reconstruction from the clean scan (`scene.urdf` and the
+    /// rest of `export::write_scene_files`), one folder per asset; `None` writes nothing.
+    pub export_dir: Option<std::path::PathBuf>,
 }
 
 impl Default for BenchConfig {
     fn default() -> Self {
-        Self { partial: asset_scanner_config(false), clean: asset_scanner_config(true), pipeline: PipelineConfig::default(), seed: 0 }
+        Self {
+            partial: asset_scanner_config(false),
+            clean: asset_scanner_config(true),
+            pipeline: PipelineConfig::default(),
+            seed: 0,
+            export_dir: None,
+        }
     }
+}
+
+/// The folder `--export` writes an asset's reconstruction into: its name with `/` as `__`.
+#[must_use]
+pub fn export_folder(root: &Path, asset_name: &str) -> std::path::PathBuf {
+    root.join(asset_name.replace(['/', '\\'], "__"))
 }
 
 /// Loads an asset and converts it to ground truth, with the warnings of both steps.
@@ -96,22 +111,27 @@ pub struct ObjectResult {
 pub fn bench_asset(entry: &AssetEntry, cfg: &BenchConfig) -> Result<ObjectResult, BenchError> {
     // The asset is read and converted once; each setting scans the same truth.
     let (truth, warnings) = load_asset_truth(entry)?;
-    let run = |scanner: &ScannerConfig| -> SettingResult {
+    let run = |scanner: &ScannerConfig| -> (SettingResult, crate::model::SceneModel) {
         let start = Instant::now();
         let scan = scan_truth(entry, &truth, scanner, cfg.seed);
         let model = reconstruct(&scan, &cfg.pipeline, &PinnedEdits::default(), &Quiet);
         let metrics = evaluate(&model, &truth.truth);
         let baseline = evaluate_baseline(&scan, &truth.truth);
-        SettingResult {
+        let result = SettingResult {
             scan_points: scan.point_count(),
             scanned_parts: scan.parts.len(),
             metrics,
             baseline,
             seconds: start.elapsed().as_secs_f64(),
-        }
+        };
+        (result, model)
     };
-    let partial = run(&cfg.partial);
-    let clean = run(&cfg.clean);
+    let (partial, _) = run(&cfg.partial);
+    let (clean, clean_model) = run(&cfg.clean);
+    if let Some(root) = &cfg.export_dir {
+        crate::export::write_scene_files(&export_folder(root, &entry.name), &clean_model, &crate::export::UrdfConfig::default())
+            .map_err(|e| BenchError::Export { asset: entry.name.clone(), source: Box::new(e) })?;
+    }
     let object = &truth.truth.objects[0];
     Ok(ObjectResult {
         name: entry.name.clone(),

@@ -12,17 +12,18 @@
 //! `armature`, an end stop → a narrowed `range`. Soft-close damping and a tilted gravity axis
 //! have no MJCF joint attribute; [`dynamics_from_effects`] reports them instead.
 //!
-//! Contacts between parts of one object that the fit leaves touching (a drawer in its body, a
-//! door beside a drawer, also a drawer and its own static carcass, which `MuJoCo`'s parent filter
-//! leaves in because the carcass is welded to the world) are excluded where one of them can move, and so are those between a
-//! standing object's moving parts and the part it stands on, so that an exported drawer slides
-//! instead of jamming on its own carcass; contacts between objects stay.
+//! Contacts are excluded for exactly the pairs `scene.srdf` disables (parent and child, parts
+//! touching at rest; see [`super::clearance`]) and the pairs clearance trimming could not
+//! separate, so that an exported drawer slides instead of jamming on its own carcass (`MuJoCo`'s
+//! parent filter skips a carcass welded to the world) while parts that do not touch at rest, and
+//! different objects, still collide. [`object_mjcf`] writes one object alone (`objects/<name>.xml`).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::clearance::{CollisionSet, collision_set};
 use super::tree::ExportTree;
 use super::urdf::{UrdfConfig, label_color, sanitize};
 use super::xml::XmlWriter;
@@ -31,7 +32,7 @@ use crate::math::{Quat, Vec3};
 use crate::model::{PartModel, SceneModel};
 use crate::primitive::PrimitiveKind;
 use crate::report::Warning;
-use crate::scan::PartId;
+use crate::scan::{ObjectId, PartId};
 
 /// Why the MJCF could not be written, or fitted effects not read.
 #[derive(Debug, thiserror::Error)]
@@ -235,18 +236,49 @@ fn material_name(label: &str) -> String {
 
 /// `scene.mjcf.xml` as text: the scene with the fitted `dynamics` (pass an empty table for none).
 pub fn scene_mjcf(scene: &SceneModel, cfg: &UrdfConfig, dynamics: &DynamicsTable) -> Result<String, MjcfError> {
+    let collisions = collision_set(scene, cfg.collision_clearance_m);
+    mjcf_document(scene, cfg, dynamics, &collisions, "partscene", None)
+}
+
+/// One object's own MJCF (`objects/<name>.xml`, model named [`super::object_name`]): its root body at
+/// the origin, as in its URDF (`scene_objects.json` gives the pose in the room), the object's parts
+/// only (objects standing on it are left out), with the fitted `dynamics` and the pairs of
+/// `collisions` inside the object excluded. `None` for an unknown object or one without parts.
+pub fn object_mjcf(
+    scene: &SceneModel,
+    object: ObjectId,
+    cfg: &UrdfConfig,
+    dynamics: &DynamicsTable,
+    collisions: &CollisionSet,
+) -> Result<Option<String>, MjcfError> {
+    if !scene.parts.iter().any(|p| p.object == object) || !scene.objects.iter().any(|o| o.id == object) {
+        return Ok(None);
+    }
+    mjcf_document(scene, cfg, dynamics, collisions, &super::object_name(scene, object), Some(object)).map(Some)
+}
+
+/// The MJCF of the whole scene (`only` = `None`) or of one object.
+fn mjcf_document(
+    scene: &SceneModel,
+    cfg: &UrdfConfig,
+    dynamics: &DynamicsTable,
+    collisions: &CollisionSet,
+    model_name: &str,
+    only: Option<ObjectId>,
+) -> Result<String, MjcfError> {
     let tree = ExportTree::new(scene);
     if let Some((part, what)) = tree.first_non_finite(scene) {
         return Err(MjcfError::NonFinite { part, link: tree.name[&part].clone(), what });
     }
+    let keep = |id: PartId| only.is_none_or(|o| scene.part(id).is_some_and(|p| p.object == o));
     let mut w = XmlWriter::new();
-    w.open("mujoco", &[("model", "partscene".to_owned())]);
+    w.open("mujoco", &[("model", model_name.to_owned())]);
     w.comment(&format!("partscene scene from {}; body and joint names match scene.urdf", scene.source));
     w.empty("compiler", &[("angle", "radian".to_owned()), ("balanceinertia", "true".to_owned())]);
     w.empty("option", &[("gravity", "0 0 -9.81".to_owned()), ("integrator", "implicitfast".to_owned())]);
     w.open("asset", &[]);
     let mut materials = BTreeSet::new();
-    for part in &scene.parts {
+    for part in scene.parts.iter().filter(|p| keep(p.id)) {
         let name = material_name(&part.label);
         if materials.insert(name.clone()) {
             let c = label_color(&part.label);
@@ -255,11 +287,29 @@ pub fn scene_mjcf(scene: &SceneModel, cfg: &UrdfConfig, dynamics: &DynamicsTable
     }
     w.close();
     w.open("worldbody", &[]);
-    for root in &tree.roots {
-        write_body(&mut w, scene, &tree, root, Vec3::ZERO, cfg, dynamics);
+    let bodies = Bodies { scene, tree: &tree, cfg, dynamics, keep: &keep };
+    match only {
+        None => {
+            for root in &tree.roots {
+                bodies.write(&mut w, root, Vec3::ZERO, &[]);
+            }
+        }
+        Some(object) => {
+            // The object's root at the origin; its parts the tree puts elsewhere (an edited
+            // scene's stray part) are welded to it, as in its URDF.
+            let root = object_root(scene, &tree, object, &keep);
+            let strays: Vec<&PartModel> = scene
+                .parts
+                .iter()
+                .filter(|p| keep(p.id) && Some(p.id) != root.map(|r| r.id) && !tree_parent(&tree, p.id).is_some_and(&keep))
+                .collect();
+            if let Some(root) = root {
+                bodies.write(&mut w, root, tree.origin_world[&root.id], &strays);
+            }
+        }
     }
     w.close();
-    let excludes = contact_excludes(scene, &tree);
+    let excludes = contact_excludes(collisions, &tree, &keep);
     if !excludes.is_empty() {
         w.open("contact", &[]);
         for (a, b) in excludes {
@@ -270,8 +320,60 @@ pub fn scene_mjcf(scene: &SceneModel, cfg: &UrdfConfig, dynamics: &DynamicsTable
     Ok(w.finish())
 }
 
-/// Writes a part's body (and, recursively, its children's) whose parent frame is at `parent_origin`.
-fn write_body(
+/// The root body of an object's own MJCF: the topmost of the object's parts above its root part
+/// (else its first part) in the export tree.
+fn object_root<'s>(scene: &'s SceneModel, tree: &ExportTree<'s>, object: ObjectId, keep: &dyn Fn(PartId) -> bool) -> Option<&'s PartModel> {
+    let obj = scene.objects.iter().find(|o| o.id == object)?;
+    let start = scene.part(obj.root_part).filter(|p| p.object == object).or_else(|| scene.parts.iter().find(|p| p.object == object))?;
+    let mut at = start.id;
+    // The tree has no cycles; the bound only guards against a malformed one.
+    for _ in 0..scene.parts.len() {
+        match tree_parent(tree, at).filter(|p| keep(*p)) {
+            Some(up) => at = up,
+            None => break,
+        }
+    }
+    scene.part(at)
+}
+
+/// The part the export tree hangs `id` under.
+fn tree_parent(tree: &ExportTree, id: PartId) -> Option<PartId> {
+    tree.children.iter().find(|(_, children)| children.iter().any(|c| c.id == id)).map(|(parent, _)| *parent)
+}
+
+/// What writing bodies needs, for the whole scene or one object (`keep`).
+struct Bodies<'a, 's> {
+    scene: &'s SceneModel,
+    tree: &'a ExportTree<'s>,
+    cfg: &'a UrdfConfig,
+    dynamics: &'a DynamicsTable,
+    keep: &'a dyn Fn(PartId) -> bool,
+}
+
+impl Bodies<'_, '_> {
+    /// Writes `part`'s body, its kept children's and (welded, no joint) `welded` extra bodies.
+    fn write(&self, w: &mut XmlWriter, part: &PartModel, parent_origin: Vec3, welded: &[&PartModel]) {
+        let origin = self.tree.origin_world[&part.id];
+        write_body_head(w, self.scene, self.tree, part, parent_origin, self.cfg, self.dynamics);
+        for child in self.tree.children_of(part.id).iter().filter(|c| (self.keep)(c.id)) {
+            self.write(w, child, origin, &[]);
+        }
+        for extra in welded {
+            let origin_extra = self.tree.origin_world[&extra.id];
+            w.open("body", &[("name", self.tree.name[&extra.id].clone()), ("pos", vec3(origin_extra - origin))]);
+            write_inertial_and_geom(w, self.tree, extra, origin_extra, self.cfg);
+            for child in self.tree.children_of(extra.id).iter().filter(|c| (self.keep)(c.id)) {
+                self.write(w, child, origin_extra, &[]);
+            }
+            w.close();
+        }
+        w.close();
+    }
+}
+
+/// Opens a part's body whose parent frame is at `parent_origin` and writes its joint, inertial
+/// and geom (the caller writes the children and closes it).
+fn write_body_head(
     w: &mut XmlWriter,
     scene: &SceneModel,
     tree: &ExportTree,
@@ -307,6 +409,12 @@ fn write_body(
         put("armature", d.armature);
         w.empty("joint", &attrs);
     }
+    write_inertial_and_geom(w, tree, part, origin, cfg);
+}
+
+/// A body's `<inertial>` and its geom: the fitted primitive.
+fn write_inertial_and_geom(w: &mut XmlWriter, tree: &ExportTree, part: &PartModel, origin: Vec3, cfg: &UrdfConfig) {
+    let name = &tree.name[&part.id];
     let prim = &part.primitive;
     let local_centre = prim.center() - origin;
     let rot = prim.rotation();
@@ -333,42 +441,16 @@ fn write_body(
     }
     geom.push(("material", material_name(&part.label)));
     w.empty("geom", &geom);
-    for child in tree.children_of(part.id) {
-        write_body(w, scene, tree, child, origin, cfg, dynamics);
-    }
-    w.close();
 }
 
-/// Body pairs whose contacts are excluded (see the module docs), each as (smaller id, larger id).
-/// Parent and child are listed too: `MuJoCo`'s parent filter does not apply when the parent is
-/// welded to the world, which is exactly a drawer in a standing cabinet.
-fn contact_excludes(scene: &SceneModel, tree: &ExportTree) -> Vec<(PartId, PartId)> {
-    // Parts that move: everything under a movable joint.
-    let mut moving = BTreeSet::new();
-    for part in &scene.parts {
-        if tree.movable_joint(part.id).is_some() {
-            moving.extend(tree.subtree(part.id));
-        }
-    }
-    let mut out = BTreeSet::new();
-    let mut add = |a: PartId, b: PartId| {
-        if a != b && (moving.contains(&a) || moving.contains(&b)) {
-            out.insert((a.min(b), a.max(b)));
-        }
-    };
-    for obj in &scene.objects {
-        let ids: Vec<PartId> = scene.parts_of(obj.id).map(|p| p.id).collect();
-        for (i, &a) in ids.iter().enumerate() {
-            for &b in &ids[i + 1..] {
-                add(a, b);
-            }
-        }
-        // A support the scene does not hold (an edited or hand-written scene) has no body.
-        if let Some(support) = obj.supported_by_part.filter(|s| tree.name.contains_key(s)) {
-            for &a in &ids {
-                add(a, support);
-            }
-        }
-    }
+/// Body pairs whose contacts are excluded, each as (smaller id, larger id): the pairs the SRDF
+/// disables (parent and child, and parts touching at rest; `MuJoCo`'s own parent filter does not
+/// apply when the parent is welded to the world, which is exactly a drawer in a standing cabinet)
+/// and the pairs clearance trimming could not separate, among the parts `keep` keeps.
+fn contact_excludes(collisions: &CollisionSet, tree: &ExportTree, keep: &dyn Fn(PartId) -> bool) -> Vec<(PartId, PartId)> {
+    let pairs = collisions.disabled.iter().map(|&(a, b, _)| (a, b)).chain(collisions.unresolved.iter().map(|&(a, b, _)| (a, b)));
+    let known = |id: &PartId| tree.name.contains_key(id) && keep(*id);
+    let out: BTreeSet<(PartId, PartId)> =
+        pairs.filter(|(a, b)| a != b && known(a) && known(b)).map(|(a, b)| (a.min(b), a.max(b))).collect();
     out.into_iter().collect()
 }
