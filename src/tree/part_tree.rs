@@ -3,20 +3,23 @@
 //!
 //! A virtual root joins the graph with tiny-weight edges to every part, so the arborescence
 //! always exists and Edmonds itself chooses the object's root (the part whose parenting costs
-//! least). Two label priors, both configurable (0 / 1 turn them off):
+//! least). Two label priors, both configurable (0 turns them off):
 //! - `root_prior`: the most base-like part (labelled body, base, frame or top; then the largest)
 //!   gets a root edge of this weight, so a bed hangs off its frame rather than its headboard when
 //!   the contact ratios alone are nearly symmetric;
 //! - `label_prior`: a contact edge from a typical parent of the child's label
-//!   ([`crate::kinematics::Vocabulary::is_typical_parent`]: a handle's door or drawer, a headboard's frame, a
-//!   leg's top) is scaled by this factor. Contacts alone are ambiguous at the centimetre level of
-//!   fitting noise — a handle touches the body behind a 2 cm door too, a headboard touches both
-//!   the frame and the mattress end — but the part is mounted on its typical parent. The prior
-//!   only chooses among real contacts; it never creates an edge. The same factor divides the
-//!   contact of a grip (handle, pull) with a part when the grip also touches a part set into that
-//!   one (whose box lies inside its box): a drawer front flush with the cabinet's front lies
-//!   inside the box fitted to the cabinet, so the handle's back touches both front faces, but it
-//!   is mounted on the drawer — the part it moves.
+//!   ([`crate::kinematics::Vocabulary::is_typical_parent`]: a handle's door or drawer, a latch's door, a
+//!   headboard's frame, a leg's top) gets this weight added. Contact weights are at most 1, so with the
+//!   default 1 a typical parent in contact wins over any other part in contact, and the contact
+//!   weights choose among typical parents. Contacts alone are ambiguous — a handle touches the body
+//!   behind a 2 cm door too, a headboard touches both the frame and the mattress end, a latch reaches
+//!   into the frame's strike by design and touches it more than its own door — but the part is
+//!   mounted on its typical parent. The prior only chooses among real contacts; it never creates an
+//!   edge.
+//! - `grip_set_into_factor` divides the contact of a grip (handle, pull) with a part when the grip
+//!   also touches a part set into that one (whose box lies inside its box): a drawer front flush
+//!   with the cabinet's front lies inside the box fitted to the cabinet, so the handle's back touches
+//!   both front faces, but it is mounted on the drawer — the part it moves.
 //!
 //! A part with no contact at all is attached by a fallback edge far lighter than any contact, and
 //! reported: to a typical parent of its label when the object has one (the headboard of a bed whose
@@ -39,13 +42,20 @@ pub struct TreeConfig {
     pub contact: ContactConfig,
     /// Weight of the root edge of the most base-like part.
     pub root_prior: f32,
-    /// Factor on contact edges from a typical parent of the child's label.
+    /// Weight added to contact edges from a typical parent of the child's label (0: off).
     pub label_prior: f32,
+    /// Divisor of a grip's contact with a part that has a part set into it which the grip touches.
+    #[serde(default = "default_grip_set_into_factor")]
+    pub grip_set_into_factor: f32,
+}
+
+fn default_grip_set_into_factor() -> f32 {
+    1.5
 }
 
 impl Default for TreeConfig {
     fn default() -> Self {
-        Self { contact: ContactConfig::default(), root_prior: 1.0, label_prior: 1.5 }
+        Self { contact: ContactConfig::default(), root_prior: 1.0, label_prior: 1.0, grip_set_into_factor: default_grip_set_into_factor() }
     }
 }
 
@@ -168,9 +178,9 @@ pub fn build_part_tree(
                 continue;
             }
             let weight = match contacts.get(&(p.id, c.id)) {
-                Some(pc) if vocab.is_typical_parent(c.label, p.label) => f64::from(pc.weight * cfg.label_prior),
+                Some(pc) if vocab.is_typical_parent(c.label, p.label) => f64::from(pc.weight + cfg.label_prior.max(0.0)),
                 Some(pc) if vocab.is_grip(c.label) && grip_touches_a_part_set_into(c, p, parts, &contacts, cfg.contact.dist_max_m) => {
-                    f64::from(pc.weight / cfg.label_prior.max(1.0))
+                    f64::from(pc.weight / cfg.grip_set_into_factor.max(1.0))
                 }
                 Some(pc) => f64::from(pc.weight),
                 // No contact: a typical parent of the child's label beats any other part, the
@@ -315,21 +325,24 @@ mod tests {
     #[test]
     fn a_latch_touching_the_frame_more_than_its_door_hangs_on_the_door() {
         // A door closed in its frame; the latch sits at the door's free edge, its back face half on
-        // the door's front face and half on the frame post beside it.
-        let frame = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.1, 0.1, 1.0));
-        let door = Primitive::cuboid_at(Vec3::new(0.45, -0.03, 0.5), Vec3::new(0.8, 0.04, 1.0));
-        let latch = Primitive::cuboid_at(Vec3::new(0.04, -0.07, 0.5), Vec3::new(0.12, 0.04, 0.04));
-        let view = [
-            TreePart { id: 1, label: "frame", primitive: &frame },
-            TreePart { id: 2, label: "door", primitive: &door },
-            TreePart { id: 3, label: "latch", primitive: &latch },
-        ];
-        let cfg = TreeConfig::default();
-        let from_frame = crate::contact::contact(&frame, &latch, &cfg.contact).expect("frame contact").weight;
-        let from_door = crate::contact::contact(&door, &latch, &cfg.contact).expect("door contact").weight;
-        assert!(from_frame > from_door, "the frame must touch more: {from_frame} vs {from_door}");
-        let (tree, _) = build_part_tree(&view, &cfg, &Vocabulary::builtin(), &BTreeMap::new());
-        assert_eq!(tree.parent.get(&3), Some(&2), "{:?}", tree.parent);
+        // the door's front face and half on the frame post beside it — or, as in robosuite's door
+        // (regression: parent wrong there), three quarters on the frame.
+        for latch_x in [0.04, 0.02] {
+            let frame = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.1, 0.1, 1.0));
+            let door = Primitive::cuboid_at(Vec3::new(0.45, -0.03, 0.5), Vec3::new(0.8, 0.04, 1.0));
+            let latch = Primitive::cuboid_at(Vec3::new(latch_x, -0.07, 0.5), Vec3::new(0.12, 0.04, 0.04));
+            let view = [
+                TreePart { id: 1, label: "frame", primitive: &frame },
+                TreePart { id: 2, label: "door", primitive: &door },
+                TreePart { id: 3, label: "latch", primitive: &latch },
+            ];
+            let cfg = TreeConfig::default();
+            let from_frame = crate::contact::contact(&frame, &latch, &cfg.contact).expect("frame contact").weight;
+            let from_door = crate::contact::contact(&door, &latch, &cfg.contact).expect("door contact").weight;
+            assert!(from_frame > from_door, "the frame must touch more: {from_frame} vs {from_door}");
+            let (tree, _) = build_part_tree(&view, &cfg, &Vocabulary::builtin(), &BTreeMap::new());
+            assert_eq!(tree.parent.get(&3), Some(&2), "latch at x = {latch_x}: {:?}", tree.parent);
+        }
     }
 
     #[test]
