@@ -27,7 +27,9 @@ pub use npz::MAX_INFLATED_BYTES;
 pub use ply::MAX_COORDINATE_M;
 /// PLY helpers shared with the mesh importers (`crate::import`).
 pub(crate) use ply::{check_element_length, one_line, type_name};
-pub use read::{UNASSIGNED, UNKNOWN_CATEGORY, UNKNOWN_LABEL, is_npz_path, read_scan, read_scan_bytes, read_scan_npz_bytes};
+pub use read::{
+    ScanArrays, UNASSIGNED, UNKNOWN_CATEGORY, UNKNOWN_LABEL, is_npz_path, read_scan, read_scan_bytes, read_scan_npz_bytes, scan_from_arrays,
+};
 pub use write::{scan_to_ply_bytes, write_scan};
 
 /// A part instance id as written in the scan (`part` property); unique in the file.

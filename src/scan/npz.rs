@@ -183,7 +183,11 @@ fn check_rows3(array: &NpyArray, name: &str, expected: &str, file: &str) -> Resu
 
 /// A point coordinate as `f32`, finite and within [`MAX_COORDINATE_M`].
 fn coordinate(points: &NpyArray, row: usize, axis: usize, file: &str) -> Result<f32, ScanError> {
-    let value = points.float(points.index_2d(row, axis)).unwrap_or(f64::NAN);
+    checked_coordinate(points.float(points.index_2d(row, axis)).unwrap_or(f64::NAN), row, axis, file)
+}
+
+/// `value`, row `row` and axis `axis` of `points`, as `f32`, finite and within [`MAX_COORDINATE_M`].
+pub(crate) fn checked_coordinate(value: f64, row: usize, axis: usize, file: &str) -> Result<f32, ScanError> {
     // A finite double beyond the f32 range becomes ±inf and is reported as non-finite.
     let c = value as f32;
     if !c.is_finite() {

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::error::ScanError;
-use super::labels::{Labels, parse_labels};
+use super::labels::{Labels, PartLabel, parse_labels};
 use super::npz::read_npz;
 use super::ply::{RawVertex, read_vertices};
 use super::{ObjectId, PartId, Scan, ScanObject, ScanPart};
@@ -78,6 +78,73 @@ pub fn read_scan_npz_bytes(
         (None, json) => (sidecar_labels(json, labels_name, &mut warnings)?, labels_name.to_owned()),
     };
     assemble(&data.vertices, data.has_normals, labels.as_ref(), npz_name, &labels_source, warnings)
+}
+
+/// A scan held as arrays, one row per point (the Python binding's input): the arrays of a `.npz`
+/// scan (`scan::npz`), already decoded.
+#[derive(Clone, Copy, Debug)]
+pub struct ScanArrays<'a> {
+    /// x, y, z in metres, world frame, +z up.
+    pub points: &'a [[f64; 3]],
+    pub normals: Option<&'a [[f64; 3]]>,
+    /// Object instance id per point; -1 = background.
+    pub object_ids: &'a [i64],
+    /// Part instance id per point; -1 = background.
+    pub part_ids: &'a [i64],
+    /// Part id → label (a part not named here is "unknown", with a warning).
+    pub part_labels: &'a BTreeMap<PartId, String>,
+    /// Object id → category.
+    pub object_categories: &'a BTreeMap<ObjectId, String>,
+}
+
+/// Builds a scan from arrays with the rules of a `.npz` scan ([`read_scan_npz_bytes`]): as many
+/// rows in every array, finite coordinates within `MAX_COORDINATE_M`, every labelled part in
+/// the scan. `name` stands for the file in errors and becomes `Scan::source`.
+pub fn scan_from_arrays(arrays: &ScanArrays, name: &str) -> Result<(Scan, Vec<Warning>), ScanError> {
+    let n = arrays.points.len();
+    let rows_error = |array: &str, rows: usize| ScanError::NpzArray {
+        file: name.to_owned(),
+        array: array.to_owned(),
+        detail: format!("has {rows} rows, `points` has {n}"),
+        expected: "one row per point".to_owned(),
+    };
+    if n == 0 {
+        return Err(ScanError::NpzArray {
+            file: name.to_owned(),
+            array: "points".to_owned(),
+            detail: "has 0 rows (an empty scan)".to_owned(),
+            expected: "at least one point".to_owned(),
+        });
+    }
+    for (array, rows) in [("object_ids", arrays.object_ids.len()), ("part_ids", arrays.part_ids.len())] {
+        if rows != n {
+            return Err(rows_error(array, rows));
+        }
+    }
+    if let Some(normals) = arrays.normals.filter(|v| v.len() != n) {
+        return Err(rows_error("normals", normals.len()));
+    }
+    let mut vertices = Vec::with_capacity(n);
+    for (row, point) in arrays.points.iter().enumerate() {
+        let mut v = RawVertex { object: arrays.object_ids[row], part: arrays.part_ids[row], ..RawVertex::default() };
+        for axis in 0..3 {
+            v.position[axis] = super::npz::checked_coordinate(point[axis], row, axis, name)?;
+            if let Some(normals) = arrays.normals {
+                v.normal[axis] = normals[row][axis] as f32;
+            }
+        }
+        vertices.push(v);
+    }
+    let labels = Labels {
+        objects: arrays.object_categories.iter().map(|(&id, c)| (id, Some(c.clone()))).collect(),
+        parts: arrays.part_labels.iter().map(|(&id, l)| (id, PartLabel { object: None, label: Some(l.clone()) })).collect(),
+    };
+    let labels = (!labels.objects.is_empty() || !labels.parts.is_empty()).then_some(labels);
+    let mut warnings = Vec::new();
+    if labels.is_none() {
+        warnings.push(Warning::new("scan", name, "no labels given: every part is labelled \"unknown\" and every object \"object\""));
+    }
+    assemble(&vertices, arrays.normals.is_some(), labels.as_ref(), name, &format!("{name} (labels)"), warnings)
 }
 
 /// The labels file beside a scan, parsed; a warning when there is none.

@@ -486,3 +486,31 @@ fn read_500k_points_timing() {
     println!("500k points: binary {binary_s:.3} s, ascii {ascii_s:.3} s");
     assert!(binary_s < 0.5, "binary read took {binary_s} s");
 }
+
+/// Arrays (the Python binding's input) follow the `.npz` rules: every array one row per point,
+/// finite coordinates, labels only for parts the scan has; the errors name the array and row.
+#[test]
+fn arrays_build_a_scan_and_bad_arrays_are_named() {
+    use std::collections::BTreeMap;
+    let points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.2], [1.0, 1.0, 0.0]];
+    let labels = BTreeMap::from([(5, "door".to_owned())]);
+    let categories = BTreeMap::from([(2, "cabinet".to_owned())]);
+    let arrays = ScanArrays {
+        points: &points,
+        normals: None,
+        object_ids: &[2, 2, 2, -1],
+        part_ids: &[5, 5, 5, -1],
+        part_labels: &labels,
+        object_categories: &categories,
+    };
+    let (scan, warnings) = scan_from_arrays(&arrays, "arrays").expect("a scan");
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_eq!((scan.parts.len(), scan.parts[0].label.as_str(), scan.background.len()), (1, "door", 1));
+    assert_eq!(scan.objects[&2].category, "cabinet");
+    let err = |a: ScanArrays| scan_from_arrays(&a, "arrays").expect_err("bad arrays").to_string();
+    assert!(err(ScanArrays { part_ids: &[5, 5], ..arrays }).contains("array `part_ids` has 2 rows, `points` has 4"));
+    let nan = [[0.0, 0.0, 0.0], [0.1, f64::NAN, 0.0], [0.0, 0.1, 0.2], [1.0, 1.0, 0.0]];
+    assert!(err(ScanArrays { points: &nan, ..arrays }).contains("row 1 has a non-finite y"));
+    let unknown = BTreeMap::from([(9, "door".to_owned())]);
+    assert!(err(ScanArrays { part_labels: &unknown, ..arrays }).contains("the labels name part 9"));
+}
