@@ -7,6 +7,7 @@
 #[cfg(feature = "gui")]
 pub mod app;
 pub mod assets;
+pub mod batch;
 pub mod bench;
 pub mod contact;
 pub mod dynamics;

@@ -109,6 +109,18 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Reconstruct many scans, in parallel, into one folder each, with a summary (batch.json,
+    /// batch.md); a re-run skips the scans already done with the same inputs.
+    Batch {
+        /// Scan files, folders of scans, quoted glob patterns or .txt manifests (one path per line).
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+        /// Scans at once (default: the number of cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
     /// Reconstruct a part-segmented scan: a PLY, or a `NumPy` .npz (arrays `points`, `object_ids`,
     /// `part_ids`, optional `normals` and label arrays), with the labels JSON beside it.
     Reconstruct {
@@ -299,6 +311,16 @@ impl Bars {
         Self { bar }
     }
 
+    /// Like [`Bars::new`], with the estimated time left.
+    fn with_eta(enabled: bool, unit: &str) -> Self {
+        let bars = Self::new(enabled, unit);
+        if let Some(b) = &bars.bar {
+            let template = format!("{{msg:>16}} [{{bar:40}}] {{pos}}/{{len}} {unit} ({{elapsed}}, {{eta}} left)");
+            b.set_style(ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar()).progress_chars("=> "));
+        }
+        bars
+    }
+
     fn finish(&self) {
         if let Some(b) = &self.bar {
             b.finish_and_clear();
@@ -378,6 +400,7 @@ fn main() -> Result<()> {
             demo(DemoRooms { seed, count, clean, min_parts }, out.as_deref(), &cfg, cli.json, &*observer(&cli)?)
         }
         Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, &cfg, cli.json, &*observer(&cli)?),
+        Command::Batch { inputs, out, jobs } => batch_cmd(&inputs, &out, jobs, &cfg, cli.json),
         Command::Eval { scene, truth, scan } => eval_cmd(&scene, &truth, scan.as_deref(), cli.json),
         Command::ScanAsset { asset, out, clean, viewpoints, noise, strays, outliers, image, up, category, seed } => {
             let mut scanner = bench::run::asset_scanner_config(clean);
@@ -483,6 +506,35 @@ fn reconstruct_cmd(scan_path: &Path, out: &Path, cfg: &PipelineConfig, json: boo
         println!("{}: {}", scan_path.display(), summary(&scene, secs));
         println!("wrote {} and {}", out.join("scene.urdf").display(), out.join("scene.json").display());
     }
+    Ok(())
+}
+
+fn batch_cmd(inputs: &[PathBuf], out: &Path, jobs: Option<usize>, cfg: &PipelineConfig, json: bool) -> Result<()> {
+    use partscene::batch;
+    let scans = batch::resolve_inputs(inputs)?;
+    let bars = Bars::with_eta(!json, "scans");
+    let run = || batch::run_batch(&scans, out, cfg, &|done, total, name| bars.update(name, done, total));
+    let report = match jobs {
+        Some(n) => {
+            anyhow::ensure!(n > 0, "--jobs must be at least 1");
+            rayon::ThreadPoolBuilder::new().num_threads(n).build()?.install(run)?
+        }
+        None => run()?,
+    };
+    bars.finish();
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", report.markdown());
+        println!("wrote {} and {}", out.join("batch.json").display(), out.join("batch.md").display());
+    }
+    anyhow::ensure!(
+        report.failed == 0,
+        "{} of {} scans failed (the others are done): see {}",
+        report.failed,
+        report.scans.len(),
+        out.join("batch.md").display()
+    );
     Ok(())
 }
 

@@ -160,3 +160,88 @@ fn multiscan_import_and_npz_scans_through_the_cli() {
     ]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--points"));
 }
+
+/// An ASCII PLY scan of a cabinet (body + drawer, points on a grid over each box's faces) and its
+/// labels, written as `NAME.ply` + `NAME.json` in `dir`.
+fn write_cabinet_scan(dir: &std::path::Path, name: &str, drawer_z: f32) {
+    let boxes = [(70, [0.0, 0.0, 0.5], [0.8, 0.5, 1.0]), (71, [0.0, 0.26, drawer_z], [0.7, 0.02, 0.25])];
+    let mut rows = Vec::new();
+    for (part, c, s) in boxes {
+        for axis in 0..3 {
+            for side in [-0.5_f32, 0.5] {
+                let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                for i in 0..=24 {
+                    for j in 0..=24 {
+                        let mut p = c;
+                        p[axis] += side * s[axis];
+                        p[u] += (i as f32 / 24.0 - 0.5) * s[u];
+                        p[v] += (j as f32 / 24.0 - 0.5) * s[v];
+                        rows.push(format!("{} {} {} 7 {part}", p[0], p[1], p[2]));
+                    }
+                }
+            }
+        }
+    }
+    let header = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty int object\nproperty int part\nend_header\n",
+        rows.len()
+    );
+    std::fs::write(dir.join(format!("{name}.ply")), header + &rows.join("\n") + "\n").expect("write ply");
+    let labels = r#"{"objects": {"7": {"category": "cabinet"}}, "parts": {"70": {"label": "body"}, "71": {"label": "drawer"}}}"#;
+    std::fs::write(dir.join(format!("{name}.json")), labels).expect("write labels");
+}
+
+/// `partscene batch`: a folder of scans with one bad file gets one output folder per good scan
+/// (the same files `reconstruct` writes), the bad one recorded as failed; a re-run skips what is
+/// done and retries the failure; a changed scan is redone.
+#[test]
+fn batch_runs_every_scan_survives_a_bad_one_and_resumes() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scans = dir.path().join("scans");
+    std::fs::create_dir_all(&scans).expect("mkdir");
+    write_cabinet_scan(&scans, "kitchen", 0.8);
+    write_cabinet_scan(&scans, "office", 0.6);
+    std::fs::write(scans.join("broken.ply"), b"ply\nnot really").expect("write");
+    let out = dir.path().join("out");
+    let run = |args: &[&str]| {
+        let mut all = vec!["batch", "--out", out.to_str().expect("utf-8"), "--json"];
+        all.extend_from_slice(args);
+        partscene(&all)
+    };
+    let o = run(&[scans.to_str().expect("utf-8")]);
+    assert!(!o.status.success(), "a failed scan makes the exit status non-zero");
+    assert!(String::from_utf8_lossy(&o.stderr).contains("1 of 3 scans failed"), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("--json prints the report");
+    let status = |r: &serde_json::Value| -> Vec<(String, String)> {
+        r["scans"]
+            .as_array()
+            .expect("scans")
+            .iter()
+            .map(|s| (s["name"].as_str().unwrap_or("").to_owned(), s["status"].as_str().unwrap_or("").to_owned()))
+            .collect()
+    };
+    let pairs = |v: &[(&str, &str)]| -> Vec<(String, String)> { v.iter().map(|(a, b)| ((*a).to_owned(), (*b).to_owned())).collect() };
+    assert_eq!(status(&report), pairs(&[("broken", "failed"), ("kitchen", "done"), ("office", "done")]));
+    assert!(report["scans"][0]["error"].as_str().unwrap_or("").contains("broken.ply"), "{report}");
+    assert_eq!(report["scans"][1]["movable_joints"], 1);
+    for f in ["batch.json", "batch.md", "kitchen/scene.urdf", "kitchen/batch-entry.json", "office/objects/cabinet7.urdf"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    // The same files as `partscene reconstruct`.
+    let single = dir.path().join("single");
+    let o = partscene(&["reconstruct", scans.join("kitchen.ply").to_str().expect("utf-8"), "--out", single.to_str().expect("utf-8")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["scene.json", "scene.urdf", "scene.mjcf.xml", "scene.srdf"] {
+        assert_eq!(std::fs::read(single.join(f)).expect("single"), std::fs::read(out.join("kitchen").join(f)).expect("batch"), "{f}");
+    }
+    // A re-run after removing the bad file and changing one scan: one skipped, one redone.
+    std::fs::remove_file(scans.join("broken.ply")).expect("rm");
+    write_cabinet_scan(&scans, "office", 0.7);
+    let o = run(&[scans.join("*.ply").to_str().expect("utf-8")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("report");
+    assert_eq!(status(&report), pairs(&[("kitchen", "skipped"), ("office", "done")]));
+    // Inputs that name nothing are refused before anything runs.
+    let o = run(&[dir.path().join("nothing-here").to_str().expect("utf-8")]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no such file or folder"), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -170,10 +170,7 @@ fn scan_from_numpy(
 #[pyfunction]
 #[pyo3(signature = (scan, vocabulary=None))]
 fn reconstruct(py: Python<'_>, scan: &NativeScan, vocabulary: Option<PathBuf>) -> PyResult<NativeScene> {
-    let mut cfg = PipelineConfig::default();
-    if let Some(path) = vocabulary {
-        cfg.vocabulary = std::sync::Arc::new(cfg.vocabulary.extended_with_file(&path).map_err(err)?);
-    }
+    let cfg = pipeline_config(vocabulary.as_deref())?;
     let mut scene = py.detach(|| run_pipeline(&scan.scan, &cfg, &PinnedEdits::default(), &Quiet));
     // The scan's warnings lead, as `partscene reconstruct` puts them.
     scene.warnings.splice(0..0, scan.warnings.iter().cloned());
@@ -215,6 +212,44 @@ fn gap_analyze(py: Python<'_>, model: PathBuf, recording: PathBuf, csv_text: Opt
     serde_json::to_string(&report).map_err(err)
 }
 
+/// The pipeline configuration with an optional vocabulary file laid over the built-in one.
+fn pipeline_config(vocabulary: Option<&Path>) -> PyResult<PipelineConfig> {
+    let mut cfg = PipelineConfig::default();
+    if let Some(path) = vocabulary {
+        cfg.vocabulary = std::sync::Arc::new(cfg.vocabulary.extended_with_file(path).map_err(err)?);
+    }
+    Ok(cfg)
+}
+
+/// The scans named by inputs (files, folders, globs, manifests) with their output names, as
+/// `partscene batch` resolves them: [(scan path, name)].
+#[pyfunction]
+fn batch_inputs(inputs: Vec<PathBuf>) -> PyResult<Vec<(PathBuf, String)>> {
+    Ok(partscene::batch::resolve_inputs(&inputs).map_err(err)?.into_iter().map(|b| (b.scan, b.name)).collect())
+}
+
+/// One scan of a batch into `out/<name>/` exactly as `partscene batch` does it (skip when done
+/// with the same inputs, never raising for the scan's own failure); the outcome as JSON text.
+#[pyfunction]
+#[pyo3(signature = (scan, name, out, vocabulary=None))]
+fn batch_run_one(py: Python<'_>, scan: PathBuf, name: String, out: PathBuf, vocabulary: Option<PathBuf>) -> PyResult<String> {
+    let cfg = pipeline_config(vocabulary.as_deref())?;
+    let input = partscene::batch::BatchInput { scan, name };
+    let outcome = py.detach(|| partscene::batch::run_one(&input, &out, &cfg));
+    serde_json::to_string(&outcome).map_err(err)
+}
+
+/// Writes `batch.json` and `batch.md` for outcomes (JSON texts from `batch_run_one`); returns the
+/// report as JSON text.
+#[pyfunction]
+fn batch_write_report(outcomes: Vec<String>, out: PathBuf, seconds: f64, threads: usize) -> PyResult<String> {
+    let scans =
+        outcomes.iter().map(|t| serde_json::from_str::<partscene::batch::ScanOutcome>(t).map_err(err)).collect::<PyResult<Vec<_>>>()?;
+    let report = partscene::batch::BatchReport::of(scans, seconds, threads);
+    report.write(&out).map_err(err)?;
+    serde_json::to_string(&report).map_err(err)
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("PartsceneError", m.py().get_type::<PartsceneError>())?;
@@ -226,5 +261,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene_from_json_text, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(gap_analyze, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_inputs, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_run_one, m)?)?;
+    m.add_function(wrap_pyfunction!(batch_write_report, m)?)?;
     Ok(())
 }
