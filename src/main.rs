@@ -109,6 +109,12 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Check URDF files as simulators read them: one tree, existing links, limits, axes, masses,
+    /// inertias, geometry sizes; exits non-zero when a file has an error.
+    CheckUrdf {
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+    },
     /// Reconstruct many scans, in parallel, into one folder each, with a summary (batch.json,
     /// batch.md); a re-run skips the scans already done with the same inputs.
     Batch {
@@ -401,6 +407,7 @@ fn main() -> Result<()> {
         }
         Command::Reconstruct { scan, out } => reconstruct_cmd(&scan, &out, &cfg, cli.json, &*observer(&cli)?),
         Command::Batch { inputs, out, jobs } => batch_cmd(&inputs, &out, jobs, &cfg, cli.json),
+        Command::CheckUrdf { files } => check_urdf_cmd(&files, cli.json),
         Command::Eval { scene, truth, scan } => eval_cmd(&scene, &truth, scan.as_deref(), cli.json),
         Command::ScanAsset { asset, out, clean, viewpoints, noise, strays, outliers, image, up, category, seed } => {
             let mut scanner = bench::run::asset_scanner_config(clean);
@@ -506,6 +513,33 @@ fn reconstruct_cmd(scan_path: &Path, out: &Path, cfg: &PipelineConfig, json: boo
         println!("{}: {}", scan_path.display(), summary(&scene, secs));
         println!("wrote {} and {}", out.join("scene.urdf").display(), out.join("scene.json").display());
     }
+    Ok(())
+}
+
+fn check_urdf_cmd(files: &[PathBuf], json: bool) -> Result<()> {
+    let mut failed = 0;
+    let mut rows = Vec::new();
+    for file in files {
+        let c = partscene::export::check_urdf_file(file);
+        failed += usize::from(!c.is_ok());
+        if json {
+            rows.push(serde_json::json!({"file": file, "ok": c.is_ok(), "links": c.links, "joints": c.joints, "root": c.root, "errors": c.errors, "warnings": c.warnings}));
+            continue;
+        }
+        for w in &c.warnings {
+            eprintln!("{}: warning: {w}", file.display());
+        }
+        for e in &c.errors {
+            eprintln!("{}: error: {e}", file.display());
+        }
+        if c.is_ok() {
+            println!("{}: ok ({} links, {} joints, root {})", file.display(), c.links, c.joints, c.root.as_deref().unwrap_or("-"));
+        }
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+    }
+    anyhow::ensure!(failed == 0, "{failed} of {} URDF files have errors", files.len());
     Ok(())
 }
 

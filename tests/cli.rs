@@ -245,3 +245,26 @@ fn batch_runs_every_scan_survives_a_bad_one_and_resumes() {
     let o = run(&[dir.path().join("nothing-here").to_str().expect("utf-8")]);
     assert!(String::from_utf8_lossy(&o.stderr).contains("no such file or folder"), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// `partscene check-urdf`: our exports pass; a broken URDF fails naming the file and the problem.
+#[test]
+fn check_urdf_passes_our_exports_and_names_what_is_wrong() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    write_cabinet_scan(dir.path(), "cabinet", 0.8);
+    let out = dir.path().join("out");
+    let o = partscene(&["reconstruct", dir.path().join("cabinet.ply").to_str().expect("utf-8"), "--out", out.to_str().expect("utf-8")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = partscene(&[
+        "check-urdf",
+        out.join("scene.urdf").to_str().expect("utf-8"),
+        out.join("objects/cabinet7.urdf").to_str().expect("utf-8"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).matches(": ok (").count(), 2);
+    let bad = dir.path().join("bad.urdf");
+    std::fs::write(&bad, r#"<robot name="r"><link name="a"/><link name="b"/></robot>"#).expect("write");
+    let o = partscene(&["check-urdf", bad.to_str().expect("utf-8")]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.urdf: error: 2 root links (a, b)"), "{err}");
+}

@@ -117,7 +117,7 @@ fn scene_json_round_trips() {
 /// A `scene.json` edited into a broken state is refused with the field and the part it names
 /// (fuzzing found a support part that did not exist panicking the MJCF export).
 #[test]
-fn a_scene_json_with_a_dangling_reference_is_refused_with_the_field_named() {
+fn a_scene_json_with_a_dangling_reference_or_a_wild_value_is_refused_with_the_field_named() {
     fn check(edit: impl Fn(&mut serde_json::Value), expected: &str) {
         let mut v: serde_json::Value = serde_json::from_str(&scene_json(&scene())).expect("json");
         edit(&mut v);
@@ -126,6 +126,10 @@ fn a_scene_json_with_a_dangling_reference_is_refused_with_the_field_named() {
     }
     check(|v| v["parts"][1]["id"] = 1.into(), "room/scene.json: parts: part id 1 appears more than once");
     check(|v| v["joints"][0]["child"] = 99.into(), "room/scene.json: joints[0].child: part 99 is not among the scene's parts");
+    check(
+        |v| v["joints"][0]["origin_world"][0] = 1e9.into(),
+        "room/scene.json: joints[0]: expected a finite axis, limits and an origin within 10000 m of the origin",
+    );
     check(
         |v| v["objects"][0]["supported_by_part"] = 77.into(),
         "room/scene.json: objects[0].supported_by_part: part 77 is not among the scene's parts",

@@ -235,7 +235,7 @@ pub fn resolve_mesh_path(base_dir: &Path, filename: &str) -> Option<PathBuf> {
 
 /// Replaces commas by spaces inside vector attribute values; returns the text and how many
 /// attributes were changed. Errors if the text is not well-formed XML.
-fn normalise_vector_commas(text: &str, path: &Path) -> Result<(String, usize), AssetError> {
+pub fn normalise_vector_commas(text: &str, path: &Path) -> Result<(String, usize), AssetError> {
     let doc = roxmltree::Document::parse(text).map_err(|e| AssetError::Xml { path: path.to_path_buf(), message: e.to_string() })?;
     let mut ranges = Vec::new();
     for node in doc.descendants().filter(roxmltree::Node::is_element) {

@@ -92,9 +92,21 @@ fn parry_shape(p: &Primitive) -> (parry3d::shape::SharedShape, Pose) {
     }
 }
 
+/// Whether parry's contact query can take the primitive: every size between a micrometre and
+/// ten kilometres, a finite pose.
+fn measurable(p: &Primitive) -> bool {
+    let sizes_ok = p.size.to_array().iter().all(|s| (1e-6..=1e4).contains(s));
+    sizes_ok && p.center().is_finite() && p.rotation().is_finite()
+}
+
 /// Signed distance between two primitives within `prediction` (negative: penetration depth) and
 /// the unit normal pointing from `a` towards `b`; `None` when farther apart.
 fn separation(a: &Primitive, b: &Primitive, prediction: f32) -> Option<(f32, Vec3)> {
+    // Shapes parry cannot measure (flat, huge or not finite; only an edited or hand-written
+    // scene has them): no contact is computed and the part keeps its fitted primitive.
+    if !(measurable(a) && measurable(b)) {
+        return None;
+    }
     let (sa, pa) = parry_shape(a);
     let (sb, pb) = parry_shape(b);
     let c = parry3d::query::contact(&pa, sa.as_ref(), &pb, sb.as_ref(), prediction).ok()??;
@@ -339,6 +351,21 @@ mod tests {
         let t = trimmed(&p, Vec3::Y, 0.01).expect("radial cut");
         assert!((t.size.x - 0.09).abs() < 1e-6 && (t.size.y - 0.09).abs() < 1e-6 && (t.size.z - 0.3).abs() < 1e-6, "{t:?}");
         assert!((t.center().y + 0.005).abs() < 1e-6, "moved away from +y: {:?}", t.center());
+    }
+
+    /// Regression (fuzzing): a flat capsule against a box of 3e38 m panicked inside parry's EPA.
+    #[test]
+    fn shapes_parry_cannot_measure_get_no_contact() {
+        let flat = Primitive {
+            kind: PrimitiveKind::Capsule,
+            size: Vec3::new(0.0, 0.0, 1e-45),
+            world_from_primitive: Pose::from_translation(Vec3::new(0.31, 0.0, 0.5)),
+        };
+        let huge = cuboid([3e38, -3e38, 0.0], [3e38, 3e38, 3e38]);
+        let unit = cuboid([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]);
+        assert!(separation(&flat, &unit, 0.1).is_none());
+        assert!(separation(&huge, &unit, 0.1).is_none());
+        assert!(separation(&unit, &cuboid([0.0, 0.0, 1.0], [1.0, 1.0, 1.0]), 0.1).is_some());
     }
 
     #[test]

@@ -8,6 +8,7 @@
 //! `scene_objects.json` ([`object_entries`]). Collision shapes keep a clearance where parts that
 //! are not parent and child touch ([`collision_set`]).
 
+mod check_urdf;
 mod clearance;
 mod gltf;
 mod mjcf;
@@ -17,6 +18,7 @@ mod tree;
 mod urdf;
 mod xml;
 
+pub use check_urdf::{UrdfCheck, check_urdf, check_urdf_file};
 pub use clearance::{CollisionSet, DisableReason, MAX_TRIM_M, MAX_TRIM_SHARE, collision_set};
 pub use srdf::{ObjectEntry, SCENE_OBJECTS_FORMAT, Support, object_entries, scene_objects_json, srdf};
 

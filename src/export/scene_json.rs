@@ -122,12 +122,35 @@ pub fn scene_from_json(text: &str, path: &str) -> Result<SceneModel, SceneJsonEr
     })
 }
 
-/// The references a scene's exporters and editor rely on: part ids are unique, every joint joins
-/// two parts of the document, and an object stands on a part the document holds. Returns the
-/// field and the problem of the first breach (parts sorted by id).
+/// What a scene's exporters and editor rely on: primitives and joints finite and within the
+/// scans' coordinate limit (`scan::MAX_COORDINATE_M`), part ids unique, every joint joining two
+/// parts of the document, an object standing on a part the document holds. Returns the field
+/// and the problem of the first breach (parts sorted by id).
 fn check_references(parts: &[PartModel], joints: &[Joint], objects: &[ObjectModel]) -> Result<(), (String, String)> {
     if let Some(w) = parts.windows(2).find(|w| w[0].id == w[1].id) {
         return Err(("parts".to_owned(), format!("part id {} appears more than once", w[0].id)));
+    }
+    let limit = crate::scan::MAX_COORDINATE_M;
+    let plausible = |v: crate::math::Vec3, bound: f32| v.is_finite() && v.abs().max_element() <= bound;
+    for p in parts {
+        let prim = &p.primitive;
+        if !plausible(prim.size, 2.0 * limit) || prim.size.min_element() < 0.0 {
+            return Err((
+                format!("parts[id {}].primitive.size", p.id),
+                format!("{:?} is not a size; expected sizes in [0, {}] m", prim.size.to_array(), 2.0 * limit),
+            ));
+        }
+        if !plausible(prim.center(), limit) || !prim.rotation().is_finite() {
+            return Err((
+                format!("parts[id {}].primitive.world_from_primitive", p.id),
+                format!("expected a finite pose within {limit} m of the origin"),
+            ));
+        }
+    }
+    for (i, j) in joints.iter().enumerate() {
+        if !plausible(j.origin_world, limit) || !j.axis_world.is_finite() || !j.lower.is_finite() || !j.upper.is_finite() {
+            return Err((format!("joints[{i}]"), format!("expected a finite axis, limits and an origin within {limit} m of the origin")));
+        }
     }
     let known = |id: PartId| parts.binary_search_by_key(&id, |p| p.id).is_ok();
     for (i, j) in joints.iter().enumerate() {
