@@ -6,4 +6,4 @@ mod relation;
 
 pub use crate::polygon::{convex_intersection, polygon_area};
 pub use planes::{SurfacePlane, surface_planes};
-pub use relation::{ContactConfig, PairContact, align, contact, contact_ratio, plane_distance};
+pub use relation::{ContactConfig, PairContact, align, contact, contact_ratio, plane_distance, through_contact};

@@ -126,12 +126,87 @@ pub fn contact_between_planes(pp: &[SurfacePlane], cp: &[SurfacePlane], cfg: &Co
     best
 }
 
+/// A child passing through the parent (a latch or spindle through a door, a knob's shaft through
+/// a panel): the child's box spans the parent's whole thickness along one of the parent's axes
+/// while its cross-section lies at least `contact_min` on the parent's face. Face contact (the
+/// paper's test) sees nothing there — no face of one lies on a face of the other — yet the child
+/// is mounted on the parent. The weight is the share of the child's cross-section on the parent's
+/// face (as a contact ratio at distance 0); the parent face is the crossed one, the child face
+/// the one most parallel to it. The thinnest crossed axis wins. Boxes of the primitives (round
+/// kinds by their bounding box) are compared in the parent's frame.
+#[must_use]
+pub fn through_contact(parent: &Primitive, child: &Primitive, cfg: &ContactConfig) -> Option<PairContact> {
+    let axes = parent.axes_world();
+    let h = parent.size * 0.5;
+    let centre = parent.center();
+    // The child's box corners in the parent's frame.
+    let ch = child.size * 0.5;
+    let caxes = child.axes_world();
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for corner in 0..8 {
+        let sign = |bit: usize| if corner >> bit & 1 == 1 { 1.0 } else { -1.0 };
+        let world = child.center() + caxes[0] * (sign(0) * ch.x) + caxes[1] * (sign(1) * ch.y) + caxes[2] * (sign(2) * ch.z);
+        let local = world - centre;
+        for k in 0..3 {
+            let x = local.dot(axes[k]);
+            lo[k] = lo[k].min(x);
+            hi[k] = hi[k].max(x);
+        }
+    }
+    if !lo.iter().chain(&hi).all(|x| x.is_finite()) {
+        return None;
+    }
+    let mut order = [0, 1, 2];
+    order.sort_by(|&a, &b| h[a].total_cmp(&h[b]));
+    for k in order {
+        if !(lo[k] <= -h[k] && hi[k] >= h[k]) {
+            continue;
+        }
+        let (u, v) = ((k + 1) % 3, (k + 2) % 3);
+        let overlap = |a: usize| (hi[a].min(h[a]) - lo[a].max(-h[a])).max(0.0);
+        let section = (hi[u] - lo[u]) * (hi[v] - lo[v]);
+        if section <= 0.0 {
+            continue;
+        }
+        let ratio = (overlap(u) * overlap(v) / section).min(1.0);
+        // The parent inside the child's section (the parent passes through the child) is not a mount.
+        let parent_face_area = 4.0 * h[u] * h[v];
+        if ratio < cfg.contact_min || section >= parent_face_area {
+            continue;
+        }
+        let parent_face = surface_planes(parent).iter().position(|f| f.axis == k && f.side > 0.0)?;
+        let child_face = surface_planes(child)
+            .iter()
+            .enumerate()
+            .max_by(|(_, a), (_, b)| a.normal.dot(axes[k]).total_cmp(&b.normal.dot(axes[k])))
+            .map(|(i, _)| i)?;
+        return Some(PairContact { weight: ratio, ratio, distance_m: 0.0, parent_face, child_face });
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn cfg() -> ContactConfig {
         ContactConfig::default()
+    }
+
+    /// Regression: ADROIT's latch, fitted as one box through its door, touched nothing by the
+    /// face test and hung off the frame.
+    #[test]
+    fn a_latch_through_a_door_is_mounted_on_it() {
+        let door = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.25), Vec3::new(0.49, 0.1, 0.5));
+        let latch = Primitive::cuboid_at(Vec3::new(-0.14, -0.01, 0.23), Vec3::new(0.44, 0.28, 0.07));
+        assert!(contact(&door, &latch, &cfg()).is_none(), "no face of one lies on a face of the other");
+        let c = through_contact(&door, &latch, &cfg()).expect("through the door's thickness");
+        assert!(c.weight > 0.5 && c.weight <= 1.0, "{c:?}");
+        let planes = surface_planes(&door);
+        assert!(planes[c.parent_face].normal.y.abs() > 0.99, "the crossed face is the door's front");
+        let beside = Primitive::cuboid_at(Vec3::new(0.5, 0.0, 0.25), Vec3::new(0.1, 0.3, 0.1));
+        assert!(through_contact(&door, &beside, &cfg()).is_none(), "beside the door, not through it");
     }
 
     #[test]

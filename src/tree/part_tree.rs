@@ -30,7 +30,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::arborescence::{WeightedEdge, max_arborescence};
-use crate::contact::{ContactConfig, PairContact, contact};
+use crate::contact::{ContactConfig, PairContact, contact, through_contact};
 use crate::kinematics::Vocabulary;
 use crate::model::ContactEdge;
 use crate::primitive::Primitive;
@@ -134,7 +134,10 @@ pub fn build_part_tree(
             if p.id == c.id {
                 continue;
             }
-            if let Some(pc) = contact(p.primitive, c.primitive, &cfg.contact) {
+            // Face contact (the paper's test), else a child passing through the parent.
+            if let Some(pc) =
+                contact(p.primitive, c.primitive, &cfg.contact).or_else(|| through_contact(p.primitive, c.primitive, &cfg.contact))
+            {
                 contacts.insert((p.id, c.id), pc);
             }
         }
