@@ -1,13 +1,12 @@
 """The Python package against the CLI and on bad input (issue 13).
 
 Needs the package installed (`pip install ./python`) and, for the tests that compare with the
-command line, `PARTSCENE_BIN` naming a built `partscene` binary (`.ci/run` sets it); those tests
-fail rather than skip when CI=true and it is missing.
+command line, `PARTSCENE_BIN` naming a built `partscene` binary (`.ci/run` sets it; see
+conftest.py).
 """
 
 import filecmp
 import json
-import os
 import subprocess
 import threading
 import xml.etree.ElementTree as ET
@@ -21,20 +20,11 @@ import partscene
 SHARED_RECORDINGS = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "recordings"
 
 
-def cli():
-    path = os.environ.get("PARTSCENE_BIN")
-    if not path:
-        if os.environ.get("CI") == "true":
-            pytest.fail("PARTSCENE_BIN is not set: the CLI comparison cannot run")
-        pytest.skip("PARTSCENE_BIN is not set (a built partscene binary to compare with)")
-    return path
-
-
 @pytest.fixture(scope="session")
-def demo(tmp_path_factory):
+def demo(tmp_path_factory, partscene_bin):
     """A demo room written by the CLI: scan.ply + scan.json, gt.json."""
     out = tmp_path_factory.mktemp("demo")
-    subprocess.run([cli(), "demo", "--seed", "3", "--out", str(out)], check=True, capture_output=True)
+    subprocess.run([partscene_bin, "demo", "--seed", "3", "--out", str(out)], check=True, capture_output=True)
     return out
 
 
@@ -42,9 +32,9 @@ def files_under(root):
     return sorted(p.relative_to(root) for p in Path(root).rglob("*") if p.is_file())
 
 
-def test_python_writes_byte_identical_files_to_the_cli(demo, tmp_path):
+def test_python_writes_byte_identical_files_to_the_cli(demo, tmp_path, partscene_bin):
     by_cli = tmp_path / "cli"
-    subprocess.run([cli(), "reconstruct", str(demo / "scan.ply"), "--out", str(by_cli)], check=True, capture_output=True)
+    subprocess.run([partscene_bin, "reconstruct", str(demo / "scan.ply"), "--out", str(by_cli)], check=True, capture_output=True)
     scene = partscene.reconstruct(partscene.read_scan(demo / "scan.ply"))
     by_python = tmp_path / "python"
     written = scene.save(by_python)

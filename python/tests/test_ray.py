@@ -3,7 +3,6 @@
 
 import filecmp
 import json
-import os
 import subprocess
 from pathlib import Path
 
@@ -17,15 +16,6 @@ import partscene.ray  # noqa: E402
 SCANS = 20
 
 
-def cli():
-    path = os.environ.get("PARTSCENE_BIN")
-    if not path:
-        if os.environ.get("CI") == "true":
-            pytest.fail("PARTSCENE_BIN is not set: the CLI comparison cannot run")
-        pytest.skip("PARTSCENE_BIN is not set")
-    return path
-
-
 @pytest.fixture(scope="module")
 def local_ray():
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
@@ -33,9 +23,9 @@ def local_ray():
     ray.shutdown()
 
 
-def test_scans_through_ray_match_the_cli_batch(local_ray, tmp_path):
+def test_scans_through_ray_match_the_cli_batch(local_ray, tmp_path, partscene_bin):
     demo = tmp_path / "demo"
-    subprocess.run([cli(), "demo", "--count", str(SCANS), "--out", str(demo)], check=True, capture_output=True)
+    subprocess.run([partscene_bin, "demo", "--count", str(SCANS), "--out", str(demo)], check=True, capture_output=True)
     scans = sorted(demo.glob("seed-*/scan.ply"))
     assert len(scans) == SCANS
     # One scan is broken: the task records the failure and the others go on.
@@ -51,7 +41,7 @@ def test_scans_through_ray_match_the_cli_batch(local_ray, tmp_path):
     assert "broken.ply" in failed[0]["error"]
 
     by_cli = tmp_path / "cli"
-    done = subprocess.run([cli(), "batch", str(manifest), "--out", str(by_cli), "--json"], capture_output=True)
+    done = subprocess.run([partscene_bin, "batch", str(manifest), "--out", str(by_cli), "--json"], capture_output=True)
     assert done.returncode != 0, "the CLI reports the broken scan too"
     cli_report = json.loads(done.stdout)
     assert [s["name"] for s in cli_report["scans"]] == [s["name"] for s in report["scans"]]
