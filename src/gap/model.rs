@@ -233,9 +233,17 @@ fn links_with_inertial(text: &str) -> std::collections::BTreeSet<String> {
 
 /// Parses URDF text; `file` names it in messages.
 pub fn parse_model(text: &str, file: &Path) -> Result<GapModel, GapError> {
+    // Vectors written with commas (`xyz="0, 0, 1"`, found in published URDFs) are read as the
+    // asset importer reads them, and noted.
+    let (normalised, commas) = crate::assets::urdf::normalise_vector_commas(text, file)
+        .map_err(|e| GapError::Urdf { file: file.to_path_buf(), message: e.to_string() })?;
+    let text = normalised.as_str();
     let robot = urdf_rs::read_from_string(text).map_err(|e| GapError::Urdf { file: file.to_path_buf(), message: e.to_string() })?;
     let model_error = |field: String, message: String| GapError::Model { file: file.to_path_buf(), field, message };
     let mut notes = Vec::new();
+    if commas > 0 {
+        notes.push(format!("{commas} vector attribute(s) written with commas were read as space-separated"));
+    }
     let with_inertial = links_with_inertial(text);
     let mut index_of: BTreeMap<&str, usize> = BTreeMap::new();
     let mut links = Vec::with_capacity(robot.links.len());
@@ -539,5 +547,20 @@ mod tests {
         // At q = π/2 (rotation about +y takes +x to -z) the door hangs: no torque.
         assert!(t.gravity(std::f64::consts::FRAC_PI_2).abs() < 1e-9);
         assert!(m.notes.iter().any(|n| n.contains("600")));
+    }
+
+    /// Published URDFs (Habitat's `ReplicaCAD`) write some vectors with commas; urdf-rs alone refused
+    /// them, so `partscene gap` could not read those models.
+    #[test]
+    fn vectors_written_with_commas_read_as_with_spaces() {
+        let commas = DOOR.replace(r#"<origin xyz="1 0 0"/><axis xyz="0 1 0"/>"#, r#"<origin xyz="1, 0, 0"/><axis xyz="0,1,0"/>"#);
+        assert_ne!(commas, DOOR);
+        let (a, b) =
+            (parse_model(DOOR, Path::new("door.urdf")).expect("spaces"), parse_model(&commas, Path::new("door.urdf")).expect("commas"));
+        let q = [0.3];
+        let g = DVec3::new(0.0, 0.0, -9.81);
+        assert!((a.joint_terms(0, &q, g).inertia - b.joint_terms(0, &q, g).inertia).abs() < 1e-12);
+        assert!((a.joint_terms(0, &q, g).gravity(0.3) - b.joint_terms(0, &q, g).gravity(0.3)).abs() < 1e-12);
+        assert!(b.notes.iter().any(|n| n.contains("2 vector attribute(s) written with commas")), "{:?}", b.notes);
     }
 }
