@@ -218,9 +218,13 @@ enum Command {
         /// The URDF (default: the recording's `# model:` line, relative to the CSV).
         #[arg(long)]
         model: Option<PathBuf>,
-        /// The recording (CSV, spec gap-recording.md).
+        /// The recording: CSV (spec gap-recording.md), or MCAP / rosbag2 (`.mcap`) with
+        /// `sensor_msgs/msg/JointState` messages.
         #[arg(long)]
         recording: PathBuf,
+        /// The `JointState` topic of an MCAP recording (needed when it has several).
+        #[arg(long)]
+        topic: Option<String>,
         #[arg(long)]
         out: PathBuf,
     },
@@ -441,7 +445,7 @@ fn main() -> Result<()> {
         }
         Command::Mjcf { scene, effects, out } => mjcf_cmd(&scene, effects.as_deref(), &out),
         Command::Bench { dir, markdown, seed, export } => bench_cmd(&dir, markdown.as_deref(), seed, export, &cfg, cli.json),
-        Command::Gap { model, recording, out } => gap_cmd(model.as_deref(), &recording, &out, cli.json),
+        Command::Gap { model, recording, topic, out } => gap_cmd(model.as_deref(), &recording, topic.as_deref(), &out, cli.json),
         Command::GapBench {
             dir,
             markdown,
@@ -856,9 +860,21 @@ fn render_cmd(
     Ok(())
 }
 
-fn gap_cmd(model: Option<&Path>, recording: &Path, out: &Path, json: bool) -> Result<()> {
+fn gap_cmd(model: Option<&Path>, recording: &Path, topic: Option<&str>, out: &Path, json: bool) -> Result<()> {
     use partscene::gap;
-    let rec = gap::read_recording(recording)?;
+    let is_mcap = recording.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
+    anyhow::ensure!(
+        topic.is_none() || is_mcap,
+        "--topic chooses among the topics of an .mcap recording; {} is not one",
+        recording.display()
+    );
+    let rec = if is_mcap {
+        let bytes = partscene::io::read_bytes(recording)?;
+        let csv = gap::mcap::mcap_to_csv(&bytes, recording, topic)?;
+        gap::parse_recording(&csv, recording)?
+    } else {
+        gap::read_recording(recording)?
+    };
     let model_path = match (model, rec.named_model_path()) {
         (Some(m), _) => m.to_path_buf(),
         (None, Some(named)) => named,

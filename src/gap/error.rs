@@ -27,6 +27,17 @@ pub enum GapError {
         /// What it found.
         found: String,
     },
+    /// An MCAP recording cannot be read.
+    #[error("{}: topic {topic}{}: {message}", file.display(), index.map_or(String::new(), |i| format!(", message {i}")))]
+    Mcap {
+        /// The recording.
+        file: PathBuf,
+        /// The topic concerned (empty when none was chosen yet).
+        topic: String,
+        /// 0-based among the topic's messages in log-time order, when one message is at fault.
+        index: Option<usize>,
+        message: String,
+    },
     /// The URDF could not be parsed.
     #[error("{}: not a readable URDF: {message}", file.display())]
     Urdf {

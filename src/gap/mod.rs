@@ -17,6 +17,8 @@ pub mod error;
 pub mod fit;
 pub mod generate;
 pub mod locate;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod mcap;
 pub mod model;
 pub mod observe;
 pub mod plot;
