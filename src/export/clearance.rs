@@ -178,10 +178,10 @@ fn joint_motion(joint: &crate::kinematics::Joint, q: f32) -> Pose {
 /// The motions that move `a` and `b` relative to each other: every movable joint on the tree
 /// path between them, sampled over its range while the others stay at rest (the rest pose
 /// included), so that parts touching at rest stay apart as any one joint moves.
-fn relative_motions(a: PartId, b: PartId, tree: &ExportTree, parent: &BTreeMap<PartId, PartId>) -> Vec<Motion> {
+fn relative_motions(a: PartId, b: PartId, tree: &ExportTree) -> Vec<Motion> {
     let chain = |mut at: PartId| {
         let mut out = vec![at];
-        while let Some(&up) = parent.get(&at) {
+        while let Some(&up) = tree.parent.get(&at) {
             if out.contains(&up) {
                 break;
             }
@@ -273,10 +273,7 @@ pub fn collision_set(scene: &SceneModel, clearance_m: f32) -> CollisionSet {
         }
     }
     disabled.sort_unstable();
-    let parent: BTreeMap<PartId, PartId> =
-        tree.children.iter().flat_map(|(p, children)| children.iter().map(move |c| (c.id, *p))).collect();
-    let motions: BTreeMap<(PartId, PartId), Vec<Motion>> =
-        touching.iter().map(|&(a, b)| ((a, b), relative_motions(a, b, &tree, &parent))).collect();
+    let motions: BTreeMap<(PartId, PartId), Vec<Motion>> = touching.iter().map(|&(a, b)| ((a, b), relative_motions(a, b, &tree))).collect();
     let mut unresolved = BTreeMap::new();
     for _ in 0..PASSES {
         let mut changed = false;

@@ -236,8 +236,18 @@ fn material_name(label: &str) -> String {
 
 /// `scene.mjcf.xml` as text: the scene with the fitted `dynamics` (pass an empty table for none).
 pub fn scene_mjcf(scene: &SceneModel, cfg: &UrdfConfig, dynamics: &DynamicsTable) -> Result<String, MjcfError> {
-    let collisions = collision_set(scene, cfg.collision_clearance_m);
-    mjcf_document(scene, cfg, dynamics, &collisions, "partscene", None)
+    scene_mjcf_with(scene, cfg, dynamics, &collision_set(scene, cfg.collision_clearance_m))
+}
+
+/// [`scene_mjcf`] with the scene's collision set already computed (`write_scene_files` shares
+/// one among all its formats).
+pub(crate) fn scene_mjcf_with(
+    scene: &SceneModel,
+    cfg: &UrdfConfig,
+    dynamics: &DynamicsTable,
+    collisions: &CollisionSet,
+) -> Result<String, MjcfError> {
+    mjcf_document(scene, cfg, dynamics, collisions, "partscene", None)
 }
 
 /// One object's own MJCF (`objects/<name>.xml`, model named [`super::object_name`]): its root body at
@@ -301,7 +311,7 @@ fn mjcf_document(
             let strays: Vec<&PartModel> = scene
                 .parts
                 .iter()
-                .filter(|p| keep(p.id) && Some(p.id) != root.map(|r| r.id) && !tree_parent(&tree, p.id).is_some_and(&keep))
+                .filter(|p| keep(p.id) && Some(p.id) != root.map(|r| r.id) && !tree.parent.get(&p.id).is_some_and(|up| keep(*up)))
                 .collect();
             if let Some(root) = root {
                 bodies.write(&mut w, root, tree.origin_world[&root.id], &strays);
@@ -328,17 +338,12 @@ fn object_root<'s>(scene: &'s SceneModel, tree: &ExportTree<'s>, object: ObjectI
     let mut at = start.id;
     // The tree has no cycles; the bound only guards against a malformed one.
     for _ in 0..scene.parts.len() {
-        match tree_parent(tree, at).filter(|p| keep(*p)) {
+        match tree.parent.get(&at).copied().filter(|p| keep(*p)) {
             Some(up) => at = up,
             None => break,
         }
     }
     scene.part(at)
-}
-
-/// The part the export tree hangs `id` under.
-fn tree_parent(tree: &ExportTree, id: PartId) -> Option<PartId> {
-    tree.children.iter().find(|(_, children)| children.iter().any(|c| c.id == id)).map(|(parent, _)| *parent)
 }
 
 /// What writing bodies needs, for the whole scene or one object (`keep`).

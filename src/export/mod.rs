@@ -92,15 +92,15 @@ pub fn write_scene_files(dir: &Path, scene: &SceneModel, cfg: &UrdfConfig) -> Re
     std::fs::create_dir_all(&objects_dir).map_err(|e| crate::io::IoError::new(&objects_dir, "create", e))?;
     // Build everything before writing anything, so a failing format leaves no half set.
     let collisions = collision_set(scene, cfg.collision_clearance_m);
-    let urdf = scene_urdf(scene, cfg)?;
-    let mjcf = scene_mjcf(scene, cfg, &DynamicsTable::new())?;
+    let urdf = urdf::scene_urdf_with(scene, cfg, &collisions)?;
+    let mjcf = mjcf::scene_mjcf_with(scene, cfg, &DynamicsTable::new(), &collisions)?;
     let glb = scene_glb(scene)?;
     let scene_srdf = srdf(scene, "partscene", &collisions, |_, _| true);
     let entries = object_entries(scene, OBJECTS_DIR);
     let objects_json = scene_objects_json(&entries)?;
     let mut per_object = Vec::new();
     for entry in &entries {
-        let Some(text) = object_urdf(scene, entry.id, cfg)? else { continue };
+        let Some(text) = urdf::object_urdf_with(scene, entry.id, cfg, &collisions)? else { continue };
         let in_object = |id| scene.part(id).is_some_and(|p| p.object == entry.id);
         let object_srdf = srdf(scene, &entry.name, &collisions, |a, b| in_object(a) && in_object(b));
         per_object.push((dir.join(&entry.urdf), text));

@@ -26,6 +26,8 @@ pub(crate) struct ExportTree<'s> {
     pub roots: Vec<&'s PartModel>,
     /// Children of each part, in id order.
     pub children: BTreeMap<PartId, Vec<&'s PartModel>>,
+    /// The part each part hangs under (the inverse of `children`).
+    pub parent: BTreeMap<PartId, PartId>,
     /// The joint into each part from its parent part (absent for world-mounted and object-mounted roots).
     pub joint_into: BTreeMap<PartId, &'s Joint>,
     /// World position of each part's link frame.
@@ -77,7 +79,7 @@ impl<'s> ExportTree<'s> {
         }
         let origin_world = scene.parts.iter().map(|p| (p.id, link_origin(scene, p))).collect();
         let name = scene.parts.iter().map(|p| (p.id, super::link_name(scene, p))).collect();
-        Self { roots, children, joint_into, origin_world, name }
+        Self { roots, children, parent, joint_into, origin_world, name }
     }
 
     /// Children of a part (empty when none).

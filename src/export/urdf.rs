@@ -13,6 +13,8 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use super::clearance::{CollisionSet, collision_set};
+
 use serde::{Deserialize, Serialize};
 use urdf_rs as ur;
 
@@ -123,13 +125,12 @@ struct LinkFrames {
 }
 
 impl LinkFrames {
-    fn new(scene: &SceneModel, cfg: &UrdfConfig) -> Self {
-        let collisions = super::clearance::collision_set(scene, cfg.collision_clearance_m);
+    fn new(scene: &SceneModel, collisions: &CollisionSet) -> Self {
         Self {
             names: scene.parts.iter().map(|p| (p.id, link_name(scene, p))).collect(),
             origins: scene.parts.iter().map(|p| (p.id, super::tree::link_origin(scene, p))).collect(),
-            collision: collisions.primitives,
-            without_collision: collisions.without_collision,
+            collision: collisions.primitives.clone(),
+            without_collision: collisions.without_collision.clone(),
         }
     }
 }
@@ -244,7 +245,11 @@ fn mount_joint(child_name: &str, child_origin: Vec3, parent_name: &str, parent_o
 /// inertia; [`scene_urdf`] writes it without an `<inertial>` element).
 #[must_use]
 pub fn scene_urdf_robot(scene: &SceneModel, cfg: &UrdfConfig) -> ur::Robot {
-    let frames = LinkFrames::new(scene, cfg);
+    scene_urdf_robot_with(scene, cfg, &collision_set(scene, cfg.collision_clearance_m))
+}
+
+fn scene_urdf_robot_with(scene: &SceneModel, cfg: &UrdfConfig, collisions: &CollisionSet) -> ur::Robot {
+    let frames = LinkFrames::new(scene, collisions);
     let mut materials = Vec::new();
     let mut links = vec![ur::Link { name: WORLD.to_owned(), inertial: ur::Inertial::default(), visual: vec![], collision: vec![] }];
     links.extend(scene.parts.iter().map(|part| part_link(part, &frames, cfg, &mut materials)));
@@ -271,8 +276,12 @@ const WORLD: &str = "world";
 /// from its root are fixed to the root. `None` for an unknown object or one without parts.
 #[must_use]
 pub fn object_urdf_robot(scene: &SceneModel, object: ObjectId, cfg: &UrdfConfig) -> Option<ur::Robot> {
+    object_urdf_robot_with(scene, object, cfg, &collision_set(scene, cfg.collision_clearance_m))
+}
+
+fn object_urdf_robot_with(scene: &SceneModel, object: ObjectId, cfg: &UrdfConfig, collisions: &CollisionSet) -> Option<ur::Robot> {
     let obj = scene.objects.iter().find(|o| o.id == object)?;
-    let frames = LinkFrames::new(scene, cfg);
+    let frames = LinkFrames::new(scene, collisions);
     let parts: Vec<&PartModel> = scene.parts.iter().filter(|p| p.object == object).collect();
     let root = parts.iter().find(|p| p.id == obj.root_part).or(parts.first())?.id;
     let mut materials = Vec::new();
@@ -336,9 +345,24 @@ pub fn scene_urdf(scene: &SceneModel, cfg: &UrdfConfig) -> Result<String, UrdfEr
     robot_to_string(&scene_urdf_robot(scene, cfg))
 }
 
+/// [`scene_urdf`] with the scene's collision set already computed.
+pub(crate) fn scene_urdf_with(scene: &SceneModel, cfg: &UrdfConfig, collisions: &CollisionSet) -> Result<String, UrdfError> {
+    robot_to_string(&scene_urdf_robot_with(scene, cfg, collisions))
+}
+
 /// An object's own URDF as text ([`object_urdf_robot`]); `None` for an unknown object.
 pub fn object_urdf(scene: &SceneModel, object: ObjectId, cfg: &UrdfConfig) -> Result<Option<String>, UrdfError> {
-    object_urdf_robot(scene, object, cfg).map(|r| robot_to_string(&r)).transpose()
+    object_urdf_with(scene, object, cfg, &collision_set(scene, cfg.collision_clearance_m))
+}
+
+/// [`object_urdf`] with the scene's collision set already computed.
+pub(crate) fn object_urdf_with(
+    scene: &SceneModel,
+    object: ObjectId,
+    cfg: &UrdfConfig,
+    collisions: &CollisionSet,
+) -> Result<Option<String>, UrdfError> {
+    object_urdf_robot_with(scene, object, cfg, collisions).map(|r| robot_to_string(&r)).transpose()
 }
 
 /// A stable colour per label word (for viewers that show URDF materials).
