@@ -190,11 +190,18 @@ pub fn chamfer_between(predicted: &Solids, truth: &Solids, n_samples: usize) -> 
 
 /// Mean over `queries` of the Euclidean distance to the nearest point of `targets`.
 /// `None` when either set is empty (or the tree cannot be built).
+///
+/// Identical targets are merged first: they change no nearest distance, but a k-d tree cannot split
+/// a bucket of equal points, so a degenerate solid (zero size, or coordinates so far out that `f32`
+/// rounds its samples together) made every query a linear scan — found by fuzzing `scene.json`.
 pub(crate) fn mean_nearest_distance(queries: &[[f32; 3]], targets: &[[f32; 3]]) -> Option<f32> {
     if queries.is_empty() || targets.is_empty() {
         return None;
     }
-    let tree = kiddo::ImmutableKdTree::<f32, 3>::new_from_slice(targets).ok()?;
+    let mut distinct = targets.to_vec();
+    distinct.sort_unstable_by_key(|p| p.map(f32::to_bits));
+    distinct.dedup_by_key(|p| p.map(f32::to_bits));
+    let tree = kiddo::ImmutableKdTree::<f32, 3>::new_from_slice(&distinct).ok()?;
     let sum: f64 =
         queries.iter().map(|q| f64::from(tree.query(q).nearest_one::<kiddo::SquaredEuclidean<f32>>().execute().distance.sqrt())).sum();
     Some((sum / queries.len() as f64) as f32)
@@ -296,6 +303,17 @@ mod tests {
 
     fn unit_cube(center: Vec3) -> Primitive {
         Primitive::cuboid_at(center, Vec3::ONE)
+    }
+
+    #[test]
+    fn nearest_distance_to_many_identical_targets_is_the_distance_to_one() {
+        // Regression (fuzz, scene_json/gt_json/multiscan): 10 000 equal targets made a k-d tree bucket
+        // that could not split, and every query scanned all of it.
+        let targets = vec![[1.0_f32, 2.0, 3.0]; 10_000];
+        let queries = [[1.0_f32, 2.0, 7.0], [4.0, 6.0, 3.0]];
+        assert_eq!(mean_nearest_distance(&queries, &targets), Some(4.5));
+        let mixed: Vec<[f32; 3]> = targets.iter().copied().chain([[1.0, 2.0, 6.0]]).collect();
+        assert_eq!(mean_nearest_distance(&queries, &mixed), Some(3.0));
     }
 
     #[test]
