@@ -192,7 +192,9 @@ fn position_space_reason(model: &GapModel, rec: &Recording, observed: &std::coll
     let unobserved: Vec<&str> =
         model.dofs().into_iter().filter(|j| !observed.contains_key(j)).map(|j| model.joints[j].name.as_str()).collect();
     if unobserved.is_empty() {
-        "no effort recorded for this joint: its motion is simulated and fitted".into()
+        // Every joint observed, yet effort space handed the joint on: it spends most of the
+        // recording against its stops (or at rest), where inverse dynamics sees only the stop.
+        "too little free motion away from its stops for inverse dynamics: its motion is simulated through the stops and fitted".into()
     } else if rec.joint_effort.is_empty() {
         "no effort recorded: its motion is simulated and fitted".into()
     } else {

@@ -73,8 +73,12 @@ pub fn find_stops(
         }
         let outside: Vec<f64> = (0..y.len()).filter(|&i| !contact[i] && residual[i].is_finite()).map(|i| residual[i]).collect();
         let scale = robust_scale(&outside).max(1e-12);
-        // An upper stop pushes down: the recorded effort exceeds what the free model needs.
-        let push = inside.iter().sum::<f64>() / inside.len() as f64 * if upward { 1.0 } else { -1.0 };
+        // An upper stop pushes down: the recorded effort exceeds what the free model needs, and
+        // by more than it does elsewhere: a residual level everywhere (a sensor offset) is not a
+        // stop. The push counts from zero or from that level, whichever leaves it smaller.
+        let sign = if upward { 1.0 } else { -1.0 };
+        let raw = inside.iter().sum::<f64>() / inside.len() as f64 * sign;
+        let push = raw.min(raw - median(&outside) * sign);
         if push < rules.min_push_sigmas * scale || push < rules.min_push_share * effort_rms {
             continue;
         }
@@ -87,6 +91,16 @@ pub fn find_stops(
         });
     }
     out
+}
+
+/// Median of the finite values (0 when there are none).
+fn median(v: &[f64]) -> f64 {
+    let mut x: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if x.is_empty() {
+        return 0.0;
+    }
+    x.sort_by(f64::total_cmp);
+    x[x.len() / 2]
 }
 
 /// Median of |speed out| / |speed in| over short visits (impacts that bounce off); 0 when the
@@ -123,4 +137,39 @@ fn restitution(time_s: &[f64], y: &[f64], contact: &[bool]) -> f64 {
     }
     ratios.sort_by(f64::total_cmp);
     ratios[ratios.len() / 2]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A joint swinging between 0.1 and 0.9 (turning points at both), its nominal residual
+    /// `level` everywhere plus `push` at the upper extreme; how many stops are found.
+    fn check(level: f64, push_at_top: f64, expected_stops: usize) {
+        let time_s: Vec<f64> = (0..2000).map(|i| f64::from(i) * 0.005).collect();
+        let y: Vec<f64> = time_s.iter().map(|t| 0.5 + 0.4 * (t * 2.0).sin()).collect();
+        let residual: Vec<f64> = y
+            .iter()
+            .enumerate()
+            .map(|(i, &q)| level + 1e-3 * ((i * 7919) % 13) as f64 / 13.0 + if q > 0.9 - 0.004 { push_at_top } else { 0.0 })
+            .collect();
+        let found = find_stops(&time_s, &y, &residual, 1.0, 1e-4, (Some(0.0), Some(2.0)), &StopRules::default());
+        assert_eq!(found.len(), expected_stops, "level {level}, push {push_at_top}: {:?}", found.iter().map(|s| &s.effect).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn a_sensor_offset_at_a_turning_point_is_not_a_stop() {
+        // Regression (MuJoCo drawer whose effort reads 2 N low): the offset, the same everywhere,
+        // was taken for a stop at the lowest point of the motion.
+        check(-2.0, 0.0, 0);
+        check(2.0, 0.0, 0);
+        check(0.0, 0.0, 0);
+    }
+
+    #[test]
+    fn a_stop_that_pushes_beyond_an_offset_is_still_found() {
+        check(0.0, 1.0, 1);
+        check(0.3, 1.0, 1);
+        check(-0.3, 1.0, 1);
+    }
 }
