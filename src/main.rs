@@ -197,6 +197,20 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Write a scene as text USD (`UsdPhysics`, one articulation per object) with the physics
+    /// `partscene gap` fitted: damping and springs as drives, Coulomb friction and armature on
+    /// `PhysxJointAxisAPI`, narrowed limits. For Isaac Sim.
+    Usd {
+        /// scene.json written by `reconstruct`, `demo` or the editor.
+        #[arg(long)]
+        scene: PathBuf,
+        /// `model.fitted.json` or `report.json` written by `partscene gap` for that scene's URDF.
+        #[arg(long)]
+        effects: Option<PathBuf>,
+        /// The `.usda` file to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Benchmark every asset under DIR: scan (partial and clean), reconstruct, score against the
     /// asset's own annotation and the object-level baseline; print the tables.
     Bench {
@@ -444,6 +458,7 @@ fn main() -> Result<()> {
             import_multiscan_cmd(&dir, &out, points, seed, cli.json)
         }
         Command::Mjcf { scene, effects, out } => mjcf_cmd(&scene, effects.as_deref(), &out),
+        Command::Usd { scene, effects, out } => usd_cmd(&scene, effects.as_deref(), &out),
         Command::Bench { dir, markdown, seed, export } => bench_cmd(&dir, markdown.as_deref(), seed, export, &cfg, cli.json),
         Command::Gap { model, recording, topic, out } => gap_cmd(model.as_deref(), &recording, topic.as_deref(), &out, cli.json),
         Command::GapBench {
@@ -1012,13 +1027,14 @@ fn caller_entry(m: &[f64], n: usize, from_caller: &[usize], r: usize, c: usize) 
     m[i * n + j]
 }
 
-fn mjcf_cmd(scene_path: &Path, effects: Option<&Path>, out: &Path) -> Result<()> {
-    use partscene::export::{DynamicsTable, dynamics_from_effects, read_fitted_effects, scene_mjcf};
+/// The scene of `scene_path` and the joint dynamics of the fitted effects in `effects` (none
+/// without), their warnings printed.
+fn scene_with_dynamics(scene_path: &Path, effects: Option<&Path>) -> Result<(SceneModel, partscene::export::DynamicsTable)> {
+    use partscene::export::{DynamicsTable, dynamics_from_effects, read_fitted_effects};
     let scene = read_scene_json(scene_path)?;
-    let cfg = UrdfConfig::default();
     let dynamics = match effects {
         Some(path) => {
-            let (table, warnings) = dynamics_from_effects(&scene, &cfg, &read_fitted_effects(path)?);
+            let (table, warnings) = dynamics_from_effects(&scene, &UrdfConfig::default(), &read_fitted_effects(path)?);
             for w in warnings {
                 eprintln!("warning: {w}");
             }
@@ -1026,7 +1042,19 @@ fn mjcf_cmd(scene_path: &Path, effects: Option<&Path>, out: &Path) -> Result<()>
         }
         None => DynamicsTable::new(),
     };
-    atomic_write(out, scene_mjcf(&scene, &cfg, &dynamics)?.as_bytes())?;
+    Ok((scene, dynamics))
+}
+
+fn mjcf_cmd(scene_path: &Path, effects: Option<&Path>, out: &Path) -> Result<()> {
+    let (scene, dynamics) = scene_with_dynamics(scene_path, effects)?;
+    atomic_write(out, partscene::export::scene_mjcf(&scene, &UrdfConfig::default(), &dynamics)?.as_bytes())?;
+    println!("wrote {} ({} joints with fitted dynamics)", out.display(), dynamics.len());
+    Ok(())
+}
+
+fn usd_cmd(scene_path: &Path, effects: Option<&Path>, out: &Path) -> Result<()> {
+    let (scene, dynamics) = scene_with_dynamics(scene_path, effects)?;
+    atomic_write(out, partscene::export::scene_usda(&scene, &UrdfConfig::default(), &dynamics)?.as_bytes())?;
     println!("wrote {} ({} joints with fitted dynamics)", out.display(), dynamics.len());
     Ok(())
 }

@@ -538,3 +538,75 @@ fn scene_files_are_all_written_and_a_broken_scene_writes_none() {
     assert_eq!(gltf::Gltf::from_slice(&bytes).expect("valid").document.nodes().count(), 1);
     roxmltree::Document::parse(&scene_mjcf(&empty, &UrdfConfig::default(), &DynamicsTable::new()).expect("mjcf")).expect("xml");
 }
+
+/// The attribute lines (`type name = value` → name → value) directly inside the prim whose
+/// definition line ends with `"name"`, in a `.usda` text.
+fn usd_prim_attrs(text: &str, name: &str) -> BTreeMap<String, String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let start = lines.iter().position(|l| l.trim_start().starts_with("def ") && l.contains(&format!("\"{name}\""))).expect("prim");
+    let mut out = BTreeMap::new();
+    let mut depth = 0;
+    for line in &lines[start + 1..] {
+        let t = line.trim();
+        match t {
+            "{" => depth += 1,
+            "}" => {
+                depth -= 1;
+                if depth == 0 {
+                    break;
+                }
+            }
+            _ if depth == 1 => {
+                if let Some((lhs, value)) = t.split_once(" = ") {
+                    let key = lhs.split_whitespace().last().expect("name");
+                    out.insert(key.to_owned(), value.to_owned());
+                }
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+#[test]
+fn usd_has_an_articulation_per_object_joints_in_degrees_and_the_fitted_dynamics_in_usd_units() {
+    use partscene::export::{DynamicsTable, dynamics_from_effects, fitted_effects_from_json, joint_name, scene_usda};
+    let s = scene();
+    let cfg = UrdfConfig::default();
+    let plain = scene_usda(&s, &cfg, &DynamicsTable::new()).expect("usd");
+    assert!(plain.starts_with("#usda 1.0"));
+    // The cabinet, the table and the microwave: three articulations, one rigid body per part.
+    assert_eq!(plain.matches("\"PhysicsArticulationRootAPI\"").count(), 3);
+    assert_eq!(plain.matches("\"PhysicsRigidBodyAPI\", \"PhysicsMassAPI\"").count(), s.parts.len());
+    assert_eq!(plain.matches("_to_world\"").count(), 3, "each object's root fixed to the world");
+    let door_joint = joint_name(&s, s.part(4).expect("door"));
+    let drawer_joint = joint_name(&s, s.part(2).expect("drawer"));
+    let door = usd_prim_attrs(&plain, &door_joint);
+    let door_j = s.joint_of(4).expect("door joint");
+    let value = |m: &BTreeMap<String, String>, k: &str| m.get(k).and_then(|v| v.parse::<f64>().ok()).unwrap_or(f64::NAN);
+    assert!((value(&door, "physics:upperLimit") - f64::from(door_j.upper).to_degrees()).abs() < 1e-3, "{door:?}");
+    assert_eq!(door.get("physics:axis").map(String::as_str), Some("\"X\""));
+    let drawer = usd_prim_attrs(&plain, &drawer_joint);
+    assert!((value(&drawer, "physics:upperLimit") - f64::from(s.joint_of(2).expect("drawer").upper)).abs() < 1e-6, "metres");
+    assert!(!plain.contains("drive:") && !plain.contains("physxJointAxis:"), "no fitted dynamics, none written");
+
+    let sidecar = serde_json::json!({"format": "partscene-gap-fitted/1", "effects": [
+        {"joint": door_joint, "kind": "viscous_damping", "params": {"damping": 0.5}},
+        {"joint": door_joint, "kind": "coulomb_friction", "params": {"friction": 0.05}},
+        {"joint": door_joint, "kind": "spring", "params": {"stiffness": 2.0, "rest_position": 0.3}},
+        {"joint": drawer_joint, "kind": "viscous_damping", "params": {"damping": 4.0}},
+        {"joint": drawer_joint, "kind": "armature", "params": {"armature": 0.2}},
+    ]})
+    .to_string();
+    let (table, _) = dynamics_from_effects(&s, &cfg, &fitted_effects_from_json(&sidecar, "x.json").expect("sidecar"));
+    let fitted = scene_usda(&s, &cfg, &table).expect("usd");
+    let door = usd_prim_attrs(&fitted, &door_joint);
+    // Rotational drives are per degree, targets in degrees.
+    assert!((value(&door, "drive:angular:physics:damping") - 0.5_f64.to_radians()).abs() < 1e-9, "{door:?}");
+    assert!((value(&door, "drive:angular:physics:stiffness") - 2.0_f64.to_radians()).abs() < 1e-9);
+    assert!((value(&door, "drive:angular:physics:targetPosition") - 0.3_f64.to_degrees()).abs() < 1e-9);
+    assert!((value(&door, "physxJointAxis:angular:staticFrictionEffort") - 0.05).abs() < 1e-12);
+    let drawer = usd_prim_attrs(&fitted, &drawer_joint);
+    assert!((value(&drawer, "drive:linear:physics:damping") - 4.0).abs() < 1e-12, "per metre, no degree conversion");
+    assert!((value(&drawer, "physxJointAxis:linear:armature") - 0.2).abs() < 1e-12);
+}

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
-use partscene::export::{DynamicsTable, UrdfConfig, scene_from_json, scene_json, scene_mjcf, scene_urdf, write_scene_files};
+use partscene::export::{DynamicsTable, UrdfConfig, scene_from_json, scene_json, scene_mjcf, scene_urdf, scene_usda, write_scene_files};
 use partscene::model::SceneModel;
 use partscene::pipeline::{PinnedEdits, PipelineConfig, Quiet, reconstruct as run_pipeline};
 use partscene::report::Warning;
@@ -114,6 +114,11 @@ impl NativeScene {
     /// `scene.mjcf.xml` text (no fitted dynamics).
     fn mjcf(&self) -> PyResult<String> {
         scene_mjcf(&self.scene, &UrdfConfig::default(), &DynamicsTable::new()).map_err(err)
+    }
+
+    /// `scene.usda` text (`UsdPhysics`, no fitted dynamics).
+    fn usda(&self) -> PyResult<String> {
+        scene_usda(&self.scene, &UrdfConfig::default(), &DynamicsTable::new()).map_err(err)
     }
 
     /// Writes the CLI's files into `dir`; returns their paths.

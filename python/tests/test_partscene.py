@@ -43,6 +43,7 @@ def test_python_writes_byte_identical_files_to_the_cli(demo, tmp_path, partscene
         assert filecmp.cmp(by_cli / rel, by_python / rel, shallow=False), f"{rel} differs"
     assert scene.urdf() == (by_cli / "scene.urdf").read_text()
     assert scene.mjcf() == (by_cli / "scene.mjcf.xml").read_text()
+    assert scene.usda() == (by_cli / "scene.usda").read_text()
 
 
 def test_arrays_of_any_integer_and_float_dtype_reconstruct_like_the_file(demo):

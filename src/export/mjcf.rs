@@ -203,16 +203,16 @@ fn inertia_along_joint(scene: &SceneModel, tree: &ExportTree, child: PartId, cfg
         .sum()
 }
 
-fn part_mass(prim: &crate::primitive::Primitive, cfg: &UrdfConfig) -> f32 {
+pub(super) fn part_mass(prim: &crate::primitive::Primitive, cfg: &UrdfConfig) -> f32 {
     (prim.volume() * cfg.density_kg_m3).max(1e-3)
 }
 
-fn num(x: f32) -> String {
+pub(super) fn num(x: f32) -> String {
     // `{}` prints the shortest text that reads back to the same f32; no "-0".
     if x == 0.0 { "0".to_owned() } else { format!("{x}") }
 }
 
-fn num64(x: f64) -> String {
+pub(super) fn num64(x: f64) -> String {
     if x == 0.0 { "0".to_owned() } else { format!("{x}") }
 }
 
@@ -332,7 +332,12 @@ fn mjcf_document(
 
 /// The root body of an object's own MJCF: the topmost of the object's parts above its root part
 /// (else its first part) in the export tree.
-fn object_root<'s>(scene: &'s SceneModel, tree: &ExportTree<'s>, object: ObjectId, keep: &dyn Fn(PartId) -> bool) -> Option<&'s PartModel> {
+pub(super) fn object_root<'s>(
+    scene: &'s SceneModel,
+    tree: &ExportTree<'s>,
+    object: ObjectId,
+    keep: &dyn Fn(PartId) -> bool,
+) -> Option<&'s PartModel> {
     let obj = scene.objects.iter().find(|o| o.id == object)?;
     let start = scene.part(obj.root_part).filter(|p| p.object == object).or_else(|| scene.parts.iter().find(|p| p.object == object))?;
     let mut at = start.id;

@@ -2,7 +2,8 @@
 //!
 //! `scene.urdf` ([`scene_urdf`]), `scene.json` ([`scene_json`]), `scene.mjcf.xml` for `MuJoCo`
 //! ([`scene_mjcf`], optionally with the reality-gap module's fitted joint dynamics) and
-//! `scene.glb` for any glTF viewer ([`scene_glb`]) all share link names ([`link_name`]) and the
+//! `scene.glb` for any glTF viewer ([`scene_glb`]) and `scene.usda` for Isaac Sim ([`scene_usda`],
+//! `UsdPhysics`, fitted dynamics too) all share link names ([`link_name`]) and the
 //! kinematic tree (`tree.rs`). Beside them: `scene.srdf` (self-collision filter, [`srdf`]),
 //! `objects/<name>.urdf` + `.srdf` + `.xml` (one articulation per object, [`object_urdf`], [`object_mjcf`]) and
 //! `scene_objects.json` ([`object_entries`]). Collision shapes keep a clearance where parts that
@@ -16,6 +17,7 @@ mod scene_json;
 mod srdf;
 mod tree;
 mod urdf;
+mod usd;
 mod xml;
 
 pub use check_urdf::{UrdfCheck, check_urdf, check_urdf_file};
@@ -32,6 +34,7 @@ pub use urdf::{
     UrdfConfig, UrdfError, label_color, link_name, object_name, object_urdf, object_urdf_robot, robot_to_string, scene_urdf,
     scene_urdf_robot,
 };
+pub use usd::{USD_ROOT, UsdError, scene_usda};
 
 use std::path::{Path, PathBuf};
 
@@ -46,6 +49,8 @@ pub enum ExportError {
     Mjcf(#[from] MjcfError),
     #[error(transparent)]
     Gltf(#[from] GltfError),
+    #[error(transparent)]
+    Usd(#[from] UsdError),
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
     #[error("cannot write scene_objects.json: {0}")]
@@ -66,6 +71,8 @@ pub struct SceneFiles {
     pub mjcf: PathBuf,
     /// `scene.glb`.
     pub glb: PathBuf,
+    /// `scene.usda`: text USD with `UsdPhysics`, one articulation per object.
+    pub usd: PathBuf,
     /// `scene.srdf`: the self-collision filter of `scene.urdf`.
     pub srdf: PathBuf,
     /// `scene_objects.json`: each object's file, world pose and support.
@@ -78,14 +85,14 @@ impl SceneFiles {
     /// All paths, in the order written.
     #[must_use]
     pub fn all(&self) -> Vec<&Path> {
-        let mut out: Vec<&Path> = vec![&self.urdf, &self.json, &self.mjcf, &self.glb, &self.srdf, &self.objects_json];
+        let mut out: Vec<&Path> = vec![&self.urdf, &self.json, &self.mjcf, &self.glb, &self.usd, &self.srdf, &self.objects_json];
         out.extend(self.objects.iter().map(PathBuf::as_path));
         out
     }
 }
 
-/// Writes `scene.urdf`, `scene.srdf`, `scene.json`, `scene.mjcf.xml` (no fitted dynamics),
-/// `scene.glb`, and per object `objects/<name>.urdf` + `.srdf` + `.xml` with `scene_objects.json`, into
+/// Writes `scene.urdf`, `scene.srdf`, `scene.json`, `scene.mjcf.xml` and `scene.usda` (no fitted
+/// dynamics), `scene.glb`, and per object `objects/<name>.urdf` + `.srdf` + `.xml` with `scene_objects.json`, into
 /// `dir` (created if missing), each atomically. Returns the paths written.
 pub fn write_scene_files(dir: &Path, scene: &SceneModel, cfg: &UrdfConfig) -> Result<SceneFiles, ExportError> {
     let objects_dir = dir.join(OBJECTS_DIR);
@@ -95,6 +102,7 @@ pub fn write_scene_files(dir: &Path, scene: &SceneModel, cfg: &UrdfConfig) -> Re
     let urdf = urdf::scene_urdf_with(scene, cfg, &collisions)?;
     let mjcf = mjcf::scene_mjcf_with(scene, cfg, &DynamicsTable::new(), &collisions)?;
     let glb = scene_glb(scene)?;
+    let usd = usd::scene_usda_with(scene, cfg, &DynamicsTable::new(), &collisions)?;
     let scene_srdf = srdf(scene, "partscene", &collisions, |_, _| true);
     let entries = object_entries(scene, OBJECTS_DIR);
     let objects_json = scene_objects_json(&entries)?;
@@ -114,6 +122,7 @@ pub fn write_scene_files(dir: &Path, scene: &SceneModel, cfg: &UrdfConfig) -> Re
         json: dir.join("scene.json"),
         mjcf: dir.join("scene.mjcf.xml"),
         glb: dir.join("scene.glb"),
+        usd: dir.join("scene.usda"),
         srdf: dir.join("scene.srdf"),
         objects_json: dir.join("scene_objects.json"),
         objects: per_object.iter().map(|(p, _)| p.clone()).collect(),
@@ -122,6 +131,7 @@ pub fn write_scene_files(dir: &Path, scene: &SceneModel, cfg: &UrdfConfig) -> Re
     crate::io::atomic_write(&files.json, scene_json(scene).as_bytes())?;
     crate::io::atomic_write(&files.mjcf, mjcf.as_bytes())?;
     crate::io::atomic_write(&files.glb, &glb)?;
+    crate::io::atomic_write(&files.usd, usd.as_bytes())?;
     crate::io::atomic_write(&files.srdf, scene_srdf.as_bytes())?;
     for (path, text) in &per_object {
         crate::io::atomic_write(path, text.as_bytes())?;

@@ -154,7 +154,12 @@ mod tests {
             .map(|(i, &q)| level + 1e-3 * ((i * 7919) % 13) as f64 / 13.0 + if q > 0.9 - 0.004 { push_at_top } else { 0.0 })
             .collect();
         let found = find_stops(&time_s, &y, &residual, 1.0, 1e-4, (Some(0.0), Some(2.0)), &StopRules::default());
-        assert_eq!(found.len(), expected_stops, "level {level}, push {push_at_top}: {:?}", found.iter().map(|s| &s.effect).collect::<Vec<_>>());
+        assert_eq!(
+            found.len(),
+            expected_stops,
+            "level {level}, push {push_at_top}: {:?}",
+            found.iter().map(|s| &s.effect).collect::<Vec<_>>()
+        );
     }
 
     #[test]

@@ -86,6 +86,10 @@ class Scene:
         """``scene.mjcf.xml`` as text."""
         return self._native.mjcf()
 
+    def usda(self) -> str:
+        """``scene.usda`` (text USD with ``UsdPhysics``, for Isaac Sim) as text."""
+        return self._native.usda()
+
     def save(self, directory: PathLike) -> List[str]:
         """Writes the files ``partscene reconstruct --out DIR`` writes; returns their paths."""
         return [str(p) for p in self._native.save(os.fspath(directory))]
