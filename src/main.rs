@@ -36,8 +36,10 @@ struct Cli {
     /// one: classes of the same name are replaced, new classes are tried first.
     #[arg(long, global = true, value_name = "FILE.toml")]
     vocab: Option<PathBuf>,
-    /// Log every pipeline stage (scan, primitives, contact graph, tree, refinement steps, joints)
-    /// to this Rerun recording (`demo`, `reconstruct`).
+    /// Log every pipeline stage (scan, primitives, contact graph, tree, refinement steps, joints,
+    /// the URDF's link frames with the joints swept through their ranges) to this Rerun recording
+    /// (`demo`, `reconstruct`); with `gap`, the recording, the model's and the fitted model's
+    /// replays and their residuals per joint.
     #[cfg(feature = "rerun")]
     #[arg(long, global = true, value_name = "FILE.rrd")]
     rerun: Option<PathBuf>,
@@ -460,7 +462,23 @@ fn main() -> Result<()> {
         Command::Mjcf { scene, effects, out } => mjcf_cmd(&scene, effects.as_deref(), &out),
         Command::Usd { scene, effects, out } => usd_cmd(&scene, effects.as_deref(), &out),
         Command::Bench { dir, markdown, seed, export } => bench_cmd(&dir, markdown.as_deref(), seed, export, &cfg, cli.json),
-        Command::Gap { model, recording, topic, out } => gap_cmd(model.as_deref(), &recording, topic.as_deref(), &out, cli.json),
+        Command::Gap { model, recording, topic, out } => {
+            let report = gap_cmd(model.as_deref(), &recording, topic.as_deref(), &out, cli.json)?;
+            #[cfg(feature = "rerun")]
+            {
+                use partscene::observe::rerun::RerunObserver;
+                let observer = match (&cli.rerun, cli.rerun_spawn) {
+                    (Some(path), _) => Some(RerunObserver::save(path)?),
+                    (None, true) => Some(RerunObserver::spawn()?),
+                    (None, false) => None,
+                };
+                if let Some(observer) = observer {
+                    observer.gap_report(&report);
+                }
+            }
+            let _ = report;
+            Ok(())
+        }
         Command::GapBench {
             dir,
             markdown,
@@ -875,7 +893,7 @@ fn render_cmd(
     Ok(())
 }
 
-fn gap_cmd(model: Option<&Path>, recording: &Path, topic: Option<&str>, out: &Path, json: bool) -> Result<()> {
+fn gap_cmd(model: Option<&Path>, recording: &Path, topic: Option<&str>, out: &Path, json: bool) -> Result<partscene::gap::GapReport> {
     use partscene::gap;
     let is_mcap = recording.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
     anyhow::ensure!(
@@ -911,7 +929,7 @@ fn gap_cmd(model: Option<&Path>, recording: &Path, topic: Option<&str>, out: &Pa
         }
         println!("rmse {:.5} -> {:.5}", report.fit.rmse_before, report.fit.rmse_after);
     }
-    Ok(())
+    Ok(report)
 }
 
 fn gap_bench_cmd(dir: &Path, markdown: Option<&Path>, requirements: &partscene::gap::bench::Requirements, json: bool) -> Result<()> {
