@@ -234,8 +234,9 @@ enum Command {
         /// The URDF (default: the recording's `# model:` line, relative to the CSV).
         #[arg(long)]
         model: Option<PathBuf>,
-        /// The recording: CSV (spec gap-recording.md), or MCAP / rosbag2 (`.mcap`) with
-        /// `sensor_msgs/msg/JointState` messages.
+        /// The recording: CSV (spec gap-recording.md), or ROS: an MCAP file or a rosbag2 folder
+        /// (MCAP storage) with `sensor_msgs/msg/JointState` and/or TF (`tf2_msgs/msg/TFMessage`:
+        /// the model's links as tracked poses); ROS recordings need --model.
         #[arg(long)]
         recording: PathBuf,
         /// The `JointState` topic of an MCAP recording (needed when it has several).
@@ -895,25 +896,35 @@ fn render_cmd(
 
 fn gap_cmd(model: Option<&Path>, recording: &Path, topic: Option<&str>, out: &Path, json: bool) -> Result<partscene::gap::GapReport> {
     use partscene::gap;
-    let is_mcap = recording.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
+    let is_ros = recording.is_dir() || recording.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
     anyhow::ensure!(
-        topic.is_none() || is_mcap,
-        "--topic chooses among the topics of an .mcap recording; {} is not one",
+        topic.is_none() || is_ros,
+        "--topic chooses among the topics of an .mcap recording or a rosbag2 folder; {} is neither",
         recording.display()
     );
-    let rec = if is_mcap {
-        let bytes = partscene::io::read_bytes(recording)?;
-        let csv = gap::mcap::mcap_to_csv(&bytes, recording, topic)?;
-        gap::parse_recording(&csv, recording)?
+    let (rec, model) = if is_ros {
+        // A ROS recording names no model, and its TF frames are read as the model's links.
+        let Some(model_path) = model else {
+            anyhow::bail!("{}: a ROS recording names no model: give --model M.urdf", recording.display());
+        };
+        let model = gap::load_model(model_path)?;
+        let frames = gap::mcap::TfFrames::of_model(&model);
+        let csv = if recording.is_dir() {
+            gap::mcap::rosbag_to_csv(recording, topic, Some(&frames))?
+        } else {
+            gap::mcap::mcap_to_csv(&partscene::io::read_bytes(recording)?, recording, topic, Some(&frames))?
+        };
+        (gap::parse_recording(&csv, recording)?, model)
     } else {
-        gap::read_recording(recording)?
+        let rec = gap::read_recording(recording)?;
+        let model_path = match (model, rec.named_model_path()) {
+            (Some(m), _) => m.to_path_buf(),
+            (None, Some(named)) => named,
+            (None, None) => anyhow::bail!("no --model given and {} has no `# model:` line", recording.display()),
+        };
+        let model = gap::load_model(&model_path)?;
+        (rec, model)
     };
-    let model_path = match (model, rec.named_model_path()) {
-        (Some(m), _) => m.to_path_buf(),
-        (None, Some(named)) => named,
-        (None, None) => anyhow::bail!("no --model given and {} has no `# model:` line", recording.display()),
-    };
-    let model = gap::load_model(&model_path)?;
     let started = Instant::now();
     let report = gap::analyze(&model, &rec, &gap::GapConfig::default())?;
     gap::write_outputs(out, &model, &report)?;

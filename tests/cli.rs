@@ -268,3 +268,42 @@ fn check_urdf_passes_our_exports_and_names_what_is_wrong() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("bad.urdf: error: 2 root links (a, b)"), "{err}");
 }
+
+#[test]
+fn a_ros_recording_needs_a_model_and_a_rosbag2_in_another_storage_is_named() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let mcap = dir.path().join("run.mcap");
+    std::fs::write(&mcap, b"not read before the model is known").expect("write");
+    let out = dir.path().join("out");
+    let run = partscene(&["gap", "--recording", mcap.to_str().expect("utf-8"), "--out", out.to_str().expect("utf-8")]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success() && err.contains("run.mcap: a ROS recording names no model: give --model"), "{err}");
+
+    let bag = dir.path().join("bag");
+    std::fs::create_dir(&bag).expect("bag");
+    std::fs::write(bag.join("metadata.yaml"), "rosbag2_bagfile_information:\n  version: 9\n  storage_identifier: sqlite3\n").expect("yaml");
+    let model = dir.path().join("door.urdf");
+    std::fs::write(
+        &model,
+        r#"<robot name="door"><link name="frame"/><link name="leaf"><inertial><mass value="5"/>
+        <inertia ixx="0.3" iyy="0.3" izz="0.3" ixy="0" ixz="0" iyz="0"/></inertial></link>
+        <joint name="hinge" type="revolute"><parent link="frame"/><child link="leaf"/><axis xyz="0 0 1"/>
+        <limit lower="0" upper="2" effort="10" velocity="3"/></joint></robot>"#,
+    )
+    .expect("model");
+    let args = [
+        "gap",
+        "--model",
+        model.to_str().expect("utf-8"),
+        "--recording",
+        bag.to_str().expect("utf-8"),
+        "--out",
+        out.to_str().expect("utf-8"),
+    ];
+    let run = partscene(&args);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && err.contains("metadata.yaml") && err.contains("rosbag2 storage \"sqlite3\": only MCAP is read"),
+        "{err}"
+    );
+}

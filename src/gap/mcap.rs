@@ -114,111 +114,323 @@ pub fn decode_joint_state(data: &[u8]) -> Result<JointState, String> {
     Ok(JointState { stamp_s: f64::from(sec) + f64::from(nanosec) * 1e-9, name, position, velocity, effort })
 }
 
-/// The `JointState` topics of an MCAP file, sorted.
-pub fn joint_state_topics(bytes: &[u8], file: &Path) -> Result<Vec<String>, GapError> {
-    let mut topics = std::collections::BTreeSet::new();
-    for (index, message) in ::mcap::MessageStream::new(bytes).map_err(|e| mcap_error(file, "", None, &e.to_string()))?.enumerate() {
-        let message = message.map_err(|e| mcap_error(file, "", Some(index), &e.to_string()))?;
-        if message.channel.schema.as_ref().is_some_and(|s| s.name == JOINT_STATE) {
-            topics.insert(message.channel.topic.clone());
+/// The ROS 2 type name of transform messages (`/tf`, `/tf_static`).
+pub const TF_MESSAGE: &str = "tf2_msgs/msg/TFMessage";
+
+/// One `geometry_msgs/msg/TransformStamped`: `child` in `parent`'s frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StampedTransform {
+    /// Header stamp, seconds (0 when unset).
+    pub stamp_s: f64,
+    pub parent: String,
+    pub child: String,
+    pub translation: [f64; 3],
+    /// x, y, z, w.
+    pub rotation_xyzw: [f64; 4],
+}
+
+/// Decodes a CDR-encoded `tf2_msgs/msg/TFMessage`.
+pub fn decode_tf_message(data: &[u8]) -> Result<Vec<StampedTransform>, String> {
+    let mut r = Cdr::new(data)?;
+    // Each TransformStamped takes at least 4 + 4 + 4 + 4 + 7 × 8 bytes.
+    let n = r.len(72)?;
+    (0..n)
+        .map(|_| {
+            let sec = r.i32()?;
+            let nanosec = r.u32()?;
+            let parent = r.string()?;
+            let child = r.string()?;
+            let translation = [r.f64()?, r.f64()?, r.f64()?];
+            let rotation_xyzw = [r.f64()?, r.f64()?, r.f64()?, r.f64()?];
+            Ok(StampedTransform { stamp_s: f64::from(sec) + f64::from(nanosec) * 1e-9, parent, child, translation, rotation_xyzw })
+        })
+        .collect()
+}
+
+/// Which TF frames become tracked link poses: the model's links moved by a joint, expressed in
+/// its root link's frame (the root is fixed to the world at the identity, spec §1).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TfFrames {
+    /// The model's root link.
+    pub root: String,
+    /// Links whose world pose is written as `<link>.pos.*` / `<link>.quat.*`.
+    pub tracked: std::collections::BTreeSet<String>,
+}
+
+impl TfFrames {
+    /// The links of `model` that a movable joint moves, and its root.
+    #[must_use]
+    pub fn of_model(model: &super::GapModel) -> Self {
+        let tracked =
+            model.joints.iter().filter(|j| j.kind != super::model::DofKind::Fixed).map(|j| model.links[j.child].name.clone()).collect();
+        Self { root: model.links.get(model.root).map(|l| l.name.clone()).unwrap_or_default(), tracked }
+    }
+}
+
+/// One input of [`ros_to_csv`]: a file's name (for errors) and bytes.
+pub type McapSource<'a> = (&'a Path, &'a [u8]);
+
+/// The recording CSV of an MCAP file: see [`ros_to_csv`].
+pub fn mcap_to_csv(bytes: &[u8], file: &Path, topic: Option<&str>, tf: Option<&TfFrames>) -> Result<String, GapError> {
+    ros_to_csv(&[(file, bytes)], topic, tf)
+}
+
+/// The recording CSV of one or more MCAP files (a rosbag2's): the `JointState` messages on `topic`
+/// (the only `JointState` topic when `None`) as `<joint>.q` / `<joint>.effort`, and, with `tf`,
+/// every `TFMessage` (`/tf`, `/tf_static`) turned into the world poses of the tracked links (the
+/// latest transform of every TF edge composed up to the model's root link when TF has it, else up
+/// to the top of the link's TF tree, taken as the world), a row at each `/tf` message. Rows at the
+/// same stamp are merged. An error names the file, the topic and the message index.
+pub fn ros_to_csv(sources: &[McapSource<'_>], topic: Option<&str>, tf: Option<&TfFrames>) -> Result<String, GapError> {
+    let mut states = std::collections::BTreeSet::new();
+    let mut tf_topics = std::collections::BTreeSet::new();
+    for (file, bytes) in sources {
+        for (index, message) in ::mcap::MessageStream::new(bytes).map_err(|e| mcap_error(file, "", None, &e.to_string()))?.enumerate() {
+            let message = message.map_err(|e| mcap_error(file, "", Some(index), &e.to_string()))?;
+            match message.channel.schema.as_ref().map(|s| s.name.as_str()) {
+                Some(JOINT_STATE) => states.insert(message.channel.topic.clone()),
+                Some(TF_MESSAGE) => tf_topics.insert(message.channel.topic.clone()),
+                _ => false,
+            };
         }
     }
-    Ok(topics.into_iter().collect())
+    let states: Vec<String> = states.into_iter().collect();
+    let poses_wanted = tf.is_some_and(|f| !f.tracked.is_empty()) && !tf_topics.is_empty();
+    let file0 = sources.first().map_or(Path::new(""), |(f, _)| *f);
+    let joint_topic = match (topic, states.as_slice()) {
+        (Some(t), _) if states.iter().any(|x| x == t) => Some(t.to_owned()),
+        (Some(t), _) => {
+            return Err(mcap_error(
+                file0,
+                t,
+                None,
+                &format!("no {JOINT_STATE} messages on this topic; the file has them on: {}", list(&states)),
+            ));
+        }
+        (None, [only]) => Some(only.clone()),
+        (None, []) if poses_wanted => None,
+        (None, []) => {
+            let what = if tf.is_some() {
+                format!("no {JOINT_STATE} messages and no {TF_MESSAGE} of the model's links")
+            } else {
+                format!("no {JOINT_STATE} messages")
+            };
+            return Err(mcap_error(file0, "", None, &format!("{what} in the file")));
+        }
+        (None, many) => {
+            return Err(mcap_error(
+                file0,
+                "",
+                None,
+                &format!("{} JointState topics ({}): choose one with --topic", many.len(), list(many)),
+            ));
+        }
+    };
+    let mut rows = Rows::default();
+    let mut edges = TfEdges::default();
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    for (file, bytes) in sources {
+        let stream = ::mcap::MessageStream::new(bytes).map_err(|e| mcap_error(file, "", None, &e.to_string()))?;
+        for message in stream {
+            let message = message.map_err(|e| mcap_error(file, "", None, &e.to_string()))?;
+            let channel_topic = message.channel.topic.clone();
+            let is_joint = joint_topic.as_deref() == Some(channel_topic.as_str());
+            let is_tf = poses_wanted && tf_topics.contains(&channel_topic);
+            if !is_joint && !is_tf {
+                continue;
+            }
+            let index = counts.entry(channel_topic.clone()).or_default();
+            let at = *index;
+            *index += 1;
+            let bad = |m: &str| mcap_error(file, &channel_topic, Some(at), m);
+            if message.channel.message_encoding != "cdr" {
+                return Err(bad(&format!("message encoding {:?}: expected \"cdr\"", message.channel.message_encoding)));
+            }
+            let log_time_s = message.log_time as f64 * 1e-9;
+            if is_joint {
+                let state = decode_joint_state(&message.data).map_err(|e| bad(&e))?;
+                rows.joint_state(if state.stamp_s > 0.0 { state.stamp_s } else { log_time_s }, &state);
+            } else if let Some(frames) = tf {
+                let transforms = decode_tf_message(&message.data).map_err(|e| bad(&e))?;
+                let stamp = transforms.iter().map(|t| t.stamp_s).find(|t| *t > 0.0).unwrap_or(log_time_s);
+                edges.update(&transforms);
+                if !channel_topic.ends_with("tf_static") {
+                    rows.poses(stamp, &edges, frames);
+                }
+            }
+        }
+    }
+    Ok(rows.csv())
+}
+
+/// The recording CSV of a rosbag2 folder with MCAP storage: its `.mcap` files in name order
+/// (`metadata.yaml`, when present, must say `storage_identifier: mcap`), as [`ros_to_csv`].
+pub fn rosbag_to_csv(dir: &Path, topic: Option<&str>, tf: Option<&TfFrames>) -> Result<String, GapError> {
+    let metadata = dir.join("metadata.yaml");
+    if metadata.is_file() {
+        let text = String::from_utf8_lossy(&crate::io::read_bytes(&metadata)?).into_owned();
+        let storage = text.lines().find_map(|l| l.trim().strip_prefix("storage_identifier:")).map(|v| v.trim().trim_matches(['"', '\'']));
+        if let Some(storage) = storage.filter(|s| *s != "mcap") {
+            return Err(mcap_error(
+                &metadata,
+                "",
+                None,
+                &format!("rosbag2 storage {storage:?}: only MCAP is read (convert with `ros2 bag convert`)"),
+            ));
+        }
+    }
+    let entries = std::fs::read_dir(dir).map_err(|e| crate::io::IoError::new(dir, "list", e))?;
+    let mut files: Vec<std::path::PathBuf> = entries
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap")))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(mcap_error(dir, "", None, "a rosbag2 folder without .mcap files"));
+    }
+    let bytes: Vec<Vec<u8>> = files.iter().map(|f| crate::io::read_bytes(f)).collect::<Result<_, _>>()?;
+    let sources: Vec<McapSource<'_>> = files.iter().map(std::path::PathBuf::as_path).zip(bytes.iter().map(Vec::as_slice)).collect();
+    ros_to_csv(&sources, topic, tf)
 }
 
 fn mcap_error(file: &Path, topic: &str, index: Option<usize>, message: &str) -> GapError {
     GapError::Mcap { file: file.to_path_buf(), topic: topic.to_owned(), index, message: message.to_owned() }
 }
 
-/// The recording CSV of the `JointState` messages on `topic` (the only `JointState` topic when
-/// `None`).
-pub fn mcap_to_csv(bytes: &[u8], file: &Path, topic: Option<&str>) -> Result<String, GapError> {
-    let topics = joint_state_topics(bytes, file)?;
-    let topic = match (topic, topics.as_slice()) {
-        (Some(t), _) if topics.iter().any(|x| x == t) => t.to_owned(),
-        (Some(t), _) => {
-            return Err(mcap_error(
-                file,
-                t,
-                None,
-                &format!("no {JOINT_STATE} messages on this topic; the file has them on: {}", list(&topics)),
-            ));
-        }
-        (None, [only]) => only.clone(),
-        (None, []) => return Err(mcap_error(file, "", None, &format!("no {JOINT_STATE} messages in the file"))),
-        (None, many) => {
-            return Err(mcap_error(file, "", None, &format!("{} JointState topics ({}): choose one with --topic", many.len(), list(many))));
-        }
-    };
-    let mut rows: Vec<(f64, JointState)> = Vec::new();
-    let stream = ::mcap::MessageStream::new(bytes).map_err(|e| mcap_error(file, &topic, None, &e.to_string()))?;
-    let mut index = 0;
-    for message in stream {
-        let message = message.map_err(|e| mcap_error(file, &topic, Some(index), &e.to_string()))?;
-        if message.channel.topic != topic {
-            continue;
-        }
-        if message.channel.message_encoding != "cdr" {
-            return Err(mcap_error(
-                file,
-                &topic,
-                Some(index),
-                &format!("message encoding {:?}: expected \"cdr\"", message.channel.message_encoding),
-            ));
-        }
-        let state = decode_joint_state(&message.data).map_err(|e| mcap_error(file, &topic, Some(index), &e))?;
-        let t = if state.stamp_s > 0.0 { state.stamp_s } else { message.log_time as f64 * 1e-9 };
-        rows.push((t, state));
-        index += 1;
-    }
-    Ok(csv_of(&rows))
-}
-
 fn list(topics: &[String]) -> String {
     if topics.is_empty() { "none".to_owned() } else { topics.join(", ") }
 }
 
-/// The CSV text: times relative to the first message, a column per joint and quantity seen.
-fn csv_of(rows: &[(f64, JointState)]) -> String {
-    let t0 = rows.first().map_or(0.0, |(t, _)| *t);
-    let mut q_joints = std::collections::BTreeSet::new();
-    let mut effort_joints = std::collections::BTreeSet::new();
-    for (_, s) in rows {
+/// A CSV column, in the order written: positions, efforts, then link poses.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Column {
+    Q(String),
+    Effort(String),
+    /// Link, component 0..3 = x, y, z.
+    Position(String, usize),
+    /// Link, component 0..4 = w, x, y, z.
+    Quaternion(String, usize),
+}
+
+impl Column {
+    fn name(&self) -> String {
+        match self {
+            Self::Q(j) => format!("{j}.q"),
+            Self::Effort(j) => format!("{j}.effort"),
+            Self::Position(l, c) => format!("{l}.pos.{}", ["x", "y", "z"][*c]),
+            Self::Quaternion(l, c) => format!("{l}.quat.{}", ["w", "x", "y", "z"][*c]),
+        }
+    }
+}
+
+/// Rows by stamp (ns, so that equal stamps merge).
+#[derive(Default)]
+struct Rows(BTreeMap<i64, BTreeMap<Column, f64>>);
+
+impl Rows {
+    fn at(&mut self, t_s: f64) -> &mut BTreeMap<Column, f64> {
+        self.0.entry((t_s * 1e9).round() as i64).or_default()
+    }
+
+    fn joint_state(&mut self, t_s: f64, s: &JointState) {
+        let row = self.at(t_s);
         for (k, n) in s.name.iter().enumerate() {
-            if k < s.position.len() {
-                q_joints.insert(n.clone());
+            if let Some(&v) = s.position.get(k) {
+                row.insert(Column::Q(n.clone()), v);
             }
-            if k < s.effort.len() {
-                effort_joints.insert(n.clone());
+            if let Some(&v) = s.effort.get(k) {
+                row.insert(Column::Effort(n.clone()), v);
+            }
+        }
+    }
+
+    fn poses(&mut self, t_s: f64, edges: &TfEdges, frames: &TfFrames) {
+        let poses: Vec<(&String, glam::DVec3, glam::DQuat)> =
+            frames.tracked.iter().filter_map(|l| edges.world_pose(l, &frames.root).map(|(p, q)| (l, p, q))).collect();
+        if poses.is_empty() {
+            return;
+        }
+        let row = self.at(t_s);
+        for (link, p, q) in poses {
+            for (c, v) in p.to_array().into_iter().enumerate() {
+                row.insert(Column::Position(link.clone(), c), v);
+            }
+            for (c, v) in [q.w, q.x, q.y, q.z].into_iter().enumerate() {
+                row.insert(Column::Quaternion(link.clone(), c), v);
             }
         }
     }
-    let mut out = String::from("# description: converted from MCAP sensor_msgs/msg/JointState\ntime");
-    for j in &q_joints {
-        let _ = write!(out, ",{j}.q");
-    }
-    for j in &effort_joints {
-        let _ = write!(out, ",{j}.effort");
-    }
-    out.push('\n');
-    for (t, s) in rows {
-        let at: BTreeMap<&str, usize> = s.name.iter().enumerate().map(|(k, n)| (n.as_str(), k)).collect();
-        let _ = write!(out, "{}", t - t0);
-        for j in &q_joints {
-            out.push(',');
-            if let Some(v) = at.get(j.as_str()).and_then(|&k| s.position.get(k)) {
-                let _ = write!(out, "{v}");
-            }
-        }
-        for j in &effort_joints {
-            out.push(',');
-            if let Some(v) = at.get(j.as_str()).and_then(|&k| s.effort.get(k)) {
-                let _ = write!(out, "{v}");
-            }
+
+    /// The CSV text: times relative to the first row, a column per quantity seen.
+    fn csv(&self) -> String {
+        let columns: std::collections::BTreeSet<&Column> = self.0.values().flat_map(BTreeMap::keys).collect();
+        let mut out =
+            String::from("# description: converted from ROS messages (MCAP: sensor_msgs/msg/JointState, tf2_msgs/msg/TFMessage)\ntime");
+        for c in &columns {
+            let _ = write!(out, ",{}", c.name());
         }
         out.push('\n');
+        let t0 = self.0.keys().next().copied().unwrap_or(0);
+        for (t, row) in &self.0 {
+            let _ = write!(out, "{}", (t - t0) as f64 * 1e-9);
+            for c in &columns {
+                out.push(',');
+                if let Some(v) = row.get(*c) {
+                    let _ = write!(out, "{v}");
+                }
+            }
+            out.push('\n');
+        }
+        out
     }
-    out
+}
+
+/// The latest transform of every TF edge, by child frame.
+#[derive(Default)]
+struct TfEdges(BTreeMap<String, (String, glam::DVec3, glam::DQuat)>);
+
+impl TfEdges {
+    fn update(&mut self, transforms: &[StampedTransform]) {
+        for t in transforms {
+            let [x, y, z, w] = t.rotation_xyzw;
+            let q = glam::DQuat::from_xyzw(x, y, z, w);
+            // A zero or non-finite quaternion is no rotation anyone meant: the edge is skipped.
+            if !(q.is_finite() && q.length() > 1e-6 && t.translation.iter().all(|v| v.is_finite())) {
+                continue;
+            }
+            self.0.insert(t.child.clone(), (t.parent.clone(), glam::DVec3::from_array(t.translation), q.normalize()));
+        }
+    }
+
+    /// `frame`'s pose in the top frame of its TF tree, and that top frame.
+    fn in_top(&self, frame: &str) -> (String, glam::DVec3, glam::DQuat) {
+        let (mut p, mut q) = (glam::DVec3::ZERO, glam::DQuat::IDENTITY);
+        let mut at = frame.to_owned();
+        // Bounded by the number of edges: a TF cycle (malformed) stops there.
+        for _ in 0..=self.0.len() {
+            let Some((parent, t, r)) = self.0.get(&at) else { break };
+            p = *t + *r * p;
+            q = *r * q;
+            at.clone_from(parent);
+        }
+        (at, p, q)
+    }
+
+    /// `link`'s pose in the frame of `root` when the two share a TF tree, else in the top frame of
+    /// its own tree; `None` when TF has not given `link` yet.
+    fn world_pose(&self, link: &str, root: &str) -> Option<(glam::DVec3, glam::DQuat)> {
+        if !self.0.contains_key(link) {
+            return None;
+        }
+        let (top, p, q) = self.in_top(link);
+        let (root_top, rp, rq) = self.in_top(root);
+        if root_top == top && root != top {
+            let inv = rq.inverse();
+            return Some((inv * (p - rp), inv * q));
+        }
+        Some((p, q))
+    }
 }
 
 #[cfg(test)]
@@ -262,6 +474,112 @@ mod tests {
         b
     }
 
+    /// CDR of a `TFMessage` (little-endian): (parent, child, translation, rotation xyzw) at one stamp.
+    fn tf_cdr(sec: i32, nanosec: u32, transforms: &[(&str, &str, [f64; 3], [f64; 4])]) -> Vec<u8> {
+        let mut body: Vec<u8> = Vec::new();
+        let align = |body: &mut Vec<u8>, n: usize| {
+            while !body.len().is_multiple_of(n) {
+                body.push(0);
+            }
+        };
+        let put_string = |body: &mut Vec<u8>, s: &str| {
+            while !body.len().is_multiple_of(4) {
+                body.push(0);
+            }
+            body.extend_from_slice(&((s.len() + 1) as u32).to_le_bytes());
+            body.extend_from_slice(s.as_bytes());
+            body.push(0);
+        };
+        body.extend_from_slice(&(transforms.len() as u32).to_le_bytes());
+        for (parent, child, t, r) in transforms {
+            align(&mut body, 4);
+            body.extend_from_slice(&sec.to_le_bytes());
+            body.extend_from_slice(&nanosec.to_le_bytes());
+            put_string(&mut body, parent);
+            put_string(&mut body, child);
+            for v in t.iter().chain(r) {
+                align(&mut body, 8);
+                body.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        let mut b = vec![0x00, 0x01, 0x00, 0x00];
+        b.extend_from_slice(&body);
+        b
+    }
+
+    /// An MCAP of messages on several topics: (topic, schema, log time, CDR).
+    fn mcap_of(messages: &[(&str, &str, u64, Vec<u8>)]) -> Vec<u8> {
+        let mut out = std::io::Cursor::new(Vec::new());
+        {
+            let mut w = ::mcap::Writer::new(&mut out).expect("writer");
+            let mut channels = BTreeMap::new();
+            for (k, (topic, schema, log_time, data)) in messages.iter().enumerate() {
+                let channel = match channels.get(topic) {
+                    Some(c) => *c,
+                    None => {
+                        let s = w.add_schema(schema, "ros2msg", b"").expect("schema");
+                        let c = w.add_channel(s, topic, "cdr", &BTreeMap::new()).expect("channel");
+                        channels.insert(*topic, c);
+                        c
+                    }
+                };
+                let header = ::mcap::records::MessageHeader {
+                    channel_id: channel,
+                    sequence: k as u32,
+                    log_time: *log_time,
+                    publish_time: *log_time,
+                };
+                w.write_to_known_channel(&header, data).expect("message");
+            }
+            w.finish().expect("finish");
+        }
+        out.into_inner()
+    }
+
+    #[test]
+    fn tf_becomes_tracked_link_poses_in_the_model_root_frame() {
+        let half = std::f64::consts::FRAC_1_SQRT_2;
+        // map → base (static, 1 m up, turned 90° about z); base → door (turning); a joint state at
+        // the first stamp too.
+        let messages = vec![
+            ("/tf_static", TF_MESSAGE, 1, tf_cdr(10, 0, &[("map", "base", [0.0, 0.0, 1.0], [0.0, 0.0, half, half])])),
+            ("/tf", TF_MESSAGE, 2, tf_cdr(10, 0, &[("base", "door", [0.5, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0])])),
+            ("/joint_states", JOINT_STATE, 3, joint_state_cdr(10, 0, &["hinge"], &[0.0], &[])),
+            ("/tf", TF_MESSAGE, 4, tf_cdr(10, 10_000_000, &[("base", "door", [0.5, 0.0, 0.0], [0.0, 0.0, half, half])])),
+        ];
+        let bytes = mcap_of(&messages);
+        let frames = TfFrames { root: "base".to_owned(), tracked: ["door".to_owned()].into() };
+        let csv = mcap_to_csv(&bytes, Path::new("run.mcap"), None, Some(&frames)).expect("converted");
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines[1], "time,hinge.q,door.pos.x,door.pos.y,door.pos.z,door.quat.w,door.quat.x,door.quat.y,door.quat.z");
+        // In the root's (base's) frame, not map's: the static turn and lift do not show.
+        let first: Vec<f64> = lines[2].split(',').map(|v| v.parse().expect("number")).collect();
+        let want = [0.0, 0.0, 0.5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0];
+        assert!(
+            first.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12),
+            "the joint state and the pose at one stamp merge: {}",
+            lines[2]
+        );
+        let last: Vec<&str> = lines[3].split(',').collect();
+        let num = |k: usize| last[k].parse::<f64>().expect("number");
+        assert!((num(0) - 0.01).abs() < 1e-9 && last[1].is_empty(), "no joint state at the second stamp: {}", lines[3]);
+        assert!((num(5) - half).abs() < 1e-12 && (num(8) - half).abs() < 1e-12, "{}", lines[3]);
+        // A root TF does not know: poses in the top frame of the link's tree.
+        let elsewhere = TfFrames { root: "cabinet".to_owned(), tracked: ["door".to_owned()].into() };
+        let csv = mcap_to_csv(&bytes, Path::new("run.mcap"), None, Some(&elsewhere)).expect("converted");
+        let first: Vec<&str> = csv.lines().nth(2).expect("row").split(',').collect();
+        let x: f64 = first[2].parse().expect("x");
+        let y: f64 = first[3].parse().expect("y");
+        let z: f64 = first[4].parse().expect("z");
+        assert!(x.abs() < 1e-12 && (y - 0.5).abs() < 1e-12 && (z - 1.0).abs() < 1e-12, "{first:?}");
+        let rec = super::super::parse_recording(&csv, Path::new("run.mcap")).expect("the CSV reader takes it");
+        assert_eq!(rec.time_s.len(), 2);
+        // A TF-only recording without a model's frames is refused, naming what is missing.
+        let tf_only = mcap_of(&messages[..2]);
+        let err = mcap_to_csv(&tf_only, Path::new("run.mcap"), None, None).expect_err("nothing to read").to_string();
+        assert!(err.contains("no sensor_msgs/msg/JointState messages"), "{err}");
+    }
+
     fn mcap_file(messages: &[(u64, Vec<u8>)], topic: &str) -> Vec<u8> {
         let mut out = std::io::Cursor::new(Vec::new());
         {
@@ -296,11 +614,11 @@ mod tests {
             (1_020_000_000, joint_state_cdr(10, 20_000_000, &["slide", "hinge"], &[0.25, 0.12], &[])),
         ];
         let bytes = mcap_file(&messages, "/joint_states");
-        let csv = mcap_to_csv(&bytes, Path::new("run.mcap"), None).expect("converted");
+        let csv = mcap_to_csv(&bytes, Path::new("run.mcap"), None, None).expect("converted");
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines[1], "time,hinge.q,slide.q,hinge.effort,slide.effort");
         assert_eq!(lines[2], "0,0.1,0.2,1.5,0");
-        assert!(lines[3].starts_with("0.00999") && lines[3].ends_with(",0.11,,1.4,"), "{}", lines[3]);
+        assert_eq!(lines[3], "0.01,0.11,,1.4,", "times from the stamps, in whole nanoseconds");
         assert!(lines[4].ends_with(",0.12,0.25,,"), "{}", lines[4]);
         let rec = super::super::parse_recording(&csv, Path::new("run.mcap")).expect("the CSV reader takes it");
         assert_eq!(rec.time_s.len(), 3);
@@ -309,7 +627,7 @@ mod tests {
     #[test]
     fn malformed_mcap_gets_a_named_error() {
         let check = |bytes: &[u8], topic: Option<&str>, expected: &str| {
-            let err = mcap_to_csv(bytes, Path::new("run.mcap"), topic).expect_err("malformed").to_string();
+            let err = mcap_to_csv(bytes, Path::new("run.mcap"), topic, None).expect_err("malformed").to_string();
             assert!(err.contains(expected), "{err:?} should contain {expected:?}");
         };
         check(b"not an mcap file", None, "run.mcap");
