@@ -189,30 +189,11 @@ enum Command {
     },
     /// Write a scene as MJCF with the physics `partscene gap` fitted (damping, frictionloss,
     /// stiffness/springref, armature, narrowed ranges) on its joints.
-    Mjcf {
-        /// scene.json written by `reconstruct`, `demo` or the editor.
-        #[arg(long)]
-        scene: PathBuf,
-        /// `model.fitted.json` or `report.json` written by `partscene gap` for that scene's URDF.
-        #[arg(long)]
-        effects: Option<PathBuf>,
-        #[arg(long)]
-        out: PathBuf,
-    },
+    Mjcf(FittedExport),
     /// Write a scene as text USD (`UsdPhysics`, one articulation per object) with the physics
     /// `partscene gap` fitted: damping and springs as drives, Coulomb friction and armature on
     /// `PhysxJointAxisAPI`, narrowed limits. For Isaac Sim.
-    Usd {
-        /// scene.json written by `reconstruct`, `demo` or the editor.
-        #[arg(long)]
-        scene: PathBuf,
-        /// `model.fitted.json` or `report.json` written by `partscene gap` for that scene's URDF.
-        #[arg(long)]
-        effects: Option<PathBuf>,
-        /// The `.usda` file to write.
-        #[arg(long)]
-        out: PathBuf,
-    },
+    Usd(FittedExport),
     /// Benchmark every asset under DIR: scan (partial and clean), reconstruct, score against the
     /// asset's own annotation and the object-level baseline; print the tables.
     Bench {
@@ -301,6 +282,20 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+}
+
+/// A scene exported with the physics `partscene gap` fitted on its joints.
+#[derive(clap::Args, Clone, Debug)]
+struct FittedExport {
+    /// scene.json written by `reconstruct`, `demo` or the editor.
+    #[arg(long)]
+    scene: PathBuf,
+    /// `model.fitted.json` or `report.json` written by `partscene gap` for that scene's URDF.
+    #[arg(long)]
+    effects: Option<PathBuf>,
+    /// The file to write.
+    #[arg(long)]
+    out: PathBuf,
 }
 
 #[derive(Subcommand, Clone)]
@@ -460,8 +455,8 @@ fn main() -> Result<()> {
         Command::Import { source: ImportSource::Multiscan { dir, out, points, seed } } => {
             import_multiscan_cmd(&dir, &out, points, seed, cli.json)
         }
-        Command::Mjcf { scene, effects, out } => mjcf_cmd(&scene, effects.as_deref(), &out),
-        Command::Usd { scene, effects, out } => usd_cmd(&scene, effects.as_deref(), &out),
+        Command::Mjcf(args) => mjcf_cmd(&args),
+        Command::Usd(args) => usd_cmd(&args),
         Command::Bench { dir, markdown, seed, export } => bench_cmd(&dir, markdown.as_deref(), seed, export, &cfg, cli.json),
         Command::Gap { model, recording, topic, out } => {
             let report = gap_cmd(model.as_deref(), &recording, topic.as_deref(), &out, cli.json)?;
@@ -1074,16 +1069,16 @@ fn scene_with_dynamics(scene_path: &Path, effects: Option<&Path>) -> Result<(Sce
     Ok((scene, dynamics))
 }
 
-fn mjcf_cmd(scene_path: &Path, effects: Option<&Path>, out: &Path) -> Result<()> {
-    let (scene, dynamics) = scene_with_dynamics(scene_path, effects)?;
-    atomic_write(out, partscene::export::scene_mjcf(&scene, &UrdfConfig::default(), &dynamics)?.as_bytes())?;
-    println!("wrote {} ({} joints with fitted dynamics)", out.display(), dynamics.len());
+fn mjcf_cmd(args: &FittedExport) -> Result<()> {
+    let (scene, dynamics) = scene_with_dynamics(&args.scene, args.effects.as_deref())?;
+    atomic_write(&args.out, partscene::export::scene_mjcf(&scene, &UrdfConfig::default(), &dynamics)?.as_bytes())?;
+    println!("wrote {} ({} joints with fitted dynamics)", args.out.display(), dynamics.len());
     Ok(())
 }
 
-fn usd_cmd(scene_path: &Path, effects: Option<&Path>, out: &Path) -> Result<()> {
-    let (scene, dynamics) = scene_with_dynamics(scene_path, effects)?;
-    atomic_write(out, partscene::export::scene_usda(&scene, &UrdfConfig::default(), &dynamics)?.as_bytes())?;
-    println!("wrote {} ({} joints with fitted dynamics)", out.display(), dynamics.len());
+fn usd_cmd(args: &FittedExport) -> Result<()> {
+    let (scene, dynamics) = scene_with_dynamics(&args.scene, args.effects.as_deref())?;
+    atomic_write(&args.out, partscene::export::scene_usda(&scene, &UrdfConfig::default(), &dynamics)?.as_bytes())?;
+    println!("wrote {} ({} joints with fitted dynamics)", args.out.display(), dynamics.len());
     Ok(())
 }

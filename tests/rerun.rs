@@ -15,21 +15,14 @@ use rerun::log::{Chunk, LogMsg};
 fn the_recording_holds_every_stage_of_the_demo_room() {
     let (_, scan) = partscene::synth::demo(0);
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("demo.rrd");
-    let observer = RerunObserver::save(&path).unwrap();
-    let scene = reconstruct_observed(&scan, &PipelineConfig::default(), &PinnedEdits::default(), &Quiet, &observer);
-    drop(observer);
+    let (scene, path) = recorded_demo(&scan, dir.path());
 
-    let file = std::fs::File::open(&path).unwrap();
     let mut entities = BTreeSet::new();
     let mut stages = BTreeSet::new();
-    for msg in DecoderApp::decode_lazy(BufReader::new(file)) {
-        if let LogMsg::ArrowMsg(_, arrow) = msg.unwrap() {
-            let chunk = Chunk::from_arrow_msg(&arrow).unwrap();
-            entities.insert(chunk.entity_path().to_string().trim_start_matches('/').to_owned());
-            if let Some(column) = chunk.timelines().iter().find(|(name, _)| name.as_str() == STAGE_TIMELINE).map(|(_, c)| c) {
-                stages.extend(column.times_raw().iter().copied());
-            }
+    for (entity, chunk) in chunks(&path) {
+        entities.insert(entity);
+        if let Some(column) = chunk.timelines().iter().find(|(name, _)| name.as_str() == STAGE_TIMELINE).map(|(_, c)| c) {
+            stages.extend(column.times_raw().iter().copied());
         }
     }
     for part in &scan.parts {
@@ -55,6 +48,15 @@ fn the_recording_holds_every_stage_of_the_demo_room() {
     let refined: usize = scene.joints.len();
     assert!(stages.contains(&0) && stages.contains(&1) && stages.contains(&2), "{stages:?}");
     assert!(stages.len() >= 3 + refined.min(10), "{} stages for {refined} refined parts", stages.len());
+}
+
+/// `scan` reconstructed while logging to `dir/demo.rrd`: the scene and the recording's path.
+fn recorded_demo(scan: &partscene::scan::Scan, dir: &std::path::Path) -> (partscene::model::SceneModel, std::path::PathBuf) {
+    let path = dir.join("demo.rrd");
+    let observer = RerunObserver::save(&path).expect("the recording starts");
+    let scene = reconstruct_observed(scan, &PipelineConfig::default(), &PinnedEdits::default(), &Quiet, &observer);
+    drop(observer);
+    (scene, path)
 }
 
 /// Every chunk of a `.rrd`: (entity path without the leading `/`, chunk).
@@ -84,10 +86,7 @@ fn the_urdf_frames_are_the_links_and_the_joints_sweep_their_ranges() {
     use partscene::observe::rerun::{JOINT_TIMELINE, SWEEP_STEPS, URDF_JOINT_POSITIONS, URDF_JOINTS, URDF_LINKS};
     let (_, scan) = partscene::synth::demo(1);
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("demo.rrd");
-    let observer = RerunObserver::save(&path).unwrap();
-    let scene = reconstruct_observed(&scan, &PipelineConfig::default(), &PinnedEdits::default(), &Quiet, &observer);
-    drop(observer);
+    let (scene, path) = recorded_demo(&scan, dir.path());
     let robot = partscene::export::scene_urdf_robot(&scene, &partscene::export::UrdfConfig::default());
     let chunks = chunks(&path);
 

@@ -437,74 +437,74 @@ impl TfEdges {
 mod tests {
     use super::*;
 
+    /// A little-endian CDR writer (the reader's counterpart, for test messages).
+    struct CdrOut(Vec<u8>);
+
+    impl CdrOut {
+        fn new() -> Self {
+            Self(Vec::new())
+        }
+        fn align(&mut self, n: usize) {
+            while !self.0.len().is_multiple_of(n) {
+                self.0.push(0);
+            }
+        }
+        fn u32(&mut self, v: u32) {
+            self.align(4);
+            self.0.extend_from_slice(&v.to_le_bytes());
+        }
+        fn f64(&mut self, v: f64) {
+            self.align(8);
+            self.0.extend_from_slice(&v.to_le_bytes());
+        }
+        fn string(&mut self, s: &str) {
+            self.u32((s.len() + 1) as u32);
+            self.0.extend_from_slice(s.as_bytes());
+            self.0.push(0);
+        }
+        fn stamp(&mut self, sec: i32, nanosec: u32) {
+            self.u32(sec as u32);
+            self.u32(nanosec);
+        }
+        /// The message: the encapsulation header (CDR, little-endian), then the body.
+        fn finish(self) -> Vec<u8> {
+            let mut b = vec![0x00, 0x01, 0x00, 0x00];
+            b.extend_from_slice(&self.0);
+            b
+        }
+    }
+
     /// CDR of a `JointState` (little-endian).
     pub(crate) fn joint_state_cdr(sec: i32, nanosec: u32, names: &[&str], position: &[f64], effort: &[f64]) -> Vec<u8> {
-        let mut b = vec![0x00, 0x01, 0x00, 0x00];
-        let mut body: Vec<u8> = Vec::new();
-        let align = |body: &mut Vec<u8>, n: usize| {
-            while !body.len().is_multiple_of(n) {
-                body.push(0);
-            }
-        };
-        let put_string = |body: &mut Vec<u8>, s: &str| {
-            while !body.len().is_multiple_of(4) {
-                body.push(0);
-            }
-            body.extend_from_slice(&((s.len() + 1) as u32).to_le_bytes());
-            body.extend_from_slice(s.as_bytes());
-            body.push(0);
-        };
-        body.extend_from_slice(&sec.to_le_bytes());
-        body.extend_from_slice(&nanosec.to_le_bytes());
-        put_string(&mut body, "base");
-        align(&mut body, 4);
-        body.extend_from_slice(&(names.len() as u32).to_le_bytes());
+        let mut c = CdrOut::new();
+        c.stamp(sec, nanosec);
+        c.string("base");
+        c.u32(names.len() as u32);
         for n in names {
-            put_string(&mut body, n);
+            c.string(n);
         }
         for values in [position, &[], effort] {
-            align(&mut body, 4);
-            body.extend_from_slice(&(values.len() as u32).to_le_bytes());
+            c.u32(values.len() as u32);
             for v in values {
-                align(&mut body, 8);
-                body.extend_from_slice(&v.to_le_bytes());
+                c.f64(*v);
             }
         }
-        b.extend_from_slice(&body);
-        b
+        c.finish()
     }
 
     /// CDR of a `TFMessage` (little-endian): (parent, child, translation, rotation xyzw) at one stamp.
     fn tf_cdr(sec: i32, nanosec: u32, transforms: &[(&str, &str, [f64; 3], [f64; 4])]) -> Vec<u8> {
-        let mut body: Vec<u8> = Vec::new();
-        let align = |body: &mut Vec<u8>, n: usize| {
-            while !body.len().is_multiple_of(n) {
-                body.push(0);
-            }
-        };
-        let put_string = |body: &mut Vec<u8>, s: &str| {
-            while !body.len().is_multiple_of(4) {
-                body.push(0);
-            }
-            body.extend_from_slice(&((s.len() + 1) as u32).to_le_bytes());
-            body.extend_from_slice(s.as_bytes());
-            body.push(0);
-        };
-        body.extend_from_slice(&(transforms.len() as u32).to_le_bytes());
+        let mut c = CdrOut::new();
+        c.u32(transforms.len() as u32);
         for (parent, child, t, r) in transforms {
-            align(&mut body, 4);
-            body.extend_from_slice(&sec.to_le_bytes());
-            body.extend_from_slice(&nanosec.to_le_bytes());
-            put_string(&mut body, parent);
-            put_string(&mut body, child);
+            c.stamp(sec, nanosec);
+            c.string(parent);
+            c.string(child);
             for v in t.iter().chain(r) {
-                align(&mut body, 8);
-                body.extend_from_slice(&v.to_le_bytes());
+                c.f64(*v);
             }
         }
-        let mut b = vec![0x00, 0x01, 0x00, 0x00];
-        b.extend_from_slice(&body);
-        b
+        c.finish()
     }
 
     /// An MCAP of messages on several topics: (topic, schema, log time, CDR).
@@ -514,14 +514,13 @@ mod tests {
             let mut w = ::mcap::Writer::new(&mut out).expect("writer");
             let mut channels = BTreeMap::new();
             for (k, (topic, schema, log_time, data)) in messages.iter().enumerate() {
-                let channel = match channels.get(topic) {
-                    Some(c) => *c,
-                    None => {
-                        let s = w.add_schema(schema, "ros2msg", b"").expect("schema");
-                        let c = w.add_channel(s, topic, "cdr", &BTreeMap::new()).expect("channel");
-                        channels.insert(*topic, c);
-                        c
-                    }
+                let channel = if let Some(c) = channels.get(topic) {
+                    *c
+                } else {
+                    let s = w.add_schema(schema, "ros2msg", b"").expect("schema");
+                    let c = w.add_channel(s, topic, "cdr", &BTreeMap::new()).expect("channel");
+                    channels.insert(*topic, c);
+                    c
                 };
                 let header = ::mcap::records::MessageHeader {
                     channel_id: channel,
@@ -534,6 +533,12 @@ mod tests {
             w.finish().expect("finish");
         }
         out.into_inner()
+    }
+
+    /// An MCAP of `JointState` messages on one topic: (log time, CDR).
+    fn mcap_file(messages: &[(u64, Vec<u8>)], topic: &str) -> Vec<u8> {
+        let on_topic: Vec<(&str, &str, u64, Vec<u8>)> = messages.iter().map(|(t, d)| (topic, JOINT_STATE, *t, d.clone())).collect();
+        mcap_of(&on_topic)
     }
 
     #[test]
@@ -578,32 +583,6 @@ mod tests {
         let tf_only = mcap_of(&messages[..2]);
         let err = mcap_to_csv(&tf_only, Path::new("run.mcap"), None, None).expect_err("nothing to read").to_string();
         assert!(err.contains("no sensor_msgs/msg/JointState messages"), "{err}");
-    }
-
-    fn mcap_file(messages: &[(u64, Vec<u8>)], topic: &str) -> Vec<u8> {
-        let mut out = std::io::Cursor::new(Vec::new());
-        {
-            let mut w = ::mcap::Writer::new(&mut out).expect("writer");
-            let schema = w
-                .add_schema(
-                    JOINT_STATE,
-                    "ros2msg",
-                    b"std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\nfloat64[] effort",
-                )
-                .expect("schema");
-            let channel = w.add_channel(schema, topic, "cdr", &BTreeMap::new()).expect("channel");
-            for (k, (log_time, data)) in messages.iter().enumerate() {
-                let header = ::mcap::records::MessageHeader {
-                    channel_id: channel,
-                    sequence: k as u32,
-                    log_time: *log_time,
-                    publish_time: *log_time,
-                };
-                w.write_to_known_channel(&header, data).expect("message");
-            }
-            w.finish().expect("finish");
-        }
-        out.into_inner()
     }
 
     #[test]
