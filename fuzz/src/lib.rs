@@ -33,6 +33,7 @@ pub type Harness = fn(&[u8]) -> bool;
 pub const TARGETS: &[(&str, Harness)] = &[
     ("scan_ply", scan_ply),
     ("gap_recording", gap_recording),
+    ("gap_mcap", gap_mcap),
     ("gap_model", gap_model),
     ("asset_urdf", asset_urdf),
     ("asset_mjcf", asset_mjcf),
@@ -152,6 +153,14 @@ pub fn multiscan(data: &[u8]) -> bool {
 /// Gap recording CSV text → recording.
 pub fn gap_recording(data: &[u8]) -> bool {
     text(data).is_some_and(|text| gap::parse_recording(text, Path::new("fuzz.csv")).is_ok())
+}
+
+/// A ROS recording (MCAP: `JointState` and TF, for a model whose root is `base` and whose moved
+/// links are `door` and `drawer`) → recording CSV → recording.
+pub fn gap_mcap(data: &[u8]) -> bool {
+    let frames = gap::mcap::TfFrames { root: "base".to_owned(), tracked: ["door".to_owned(), "drawer".to_owned()].into() };
+    gap::mcap::mcap_to_csv(data, Path::new("fuzz.mcap"), None, Some(&frames))
+        .is_ok_and(|csv| gap::parse_recording(&csv, Path::new("fuzz.mcap")).is_ok())
 }
 
 /// URDF text → gap model → multibody → one inverse dynamics call (at rest and moving).
