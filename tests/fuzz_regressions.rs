@@ -141,3 +141,13 @@ fn write_session_seeds() {
         session.save(&out.join(format!("session-{i}.json"))).expect("write a seed");
     }
 }
+
+/// Issue 14, `gap_mcap`: a 4 KB MCAP whose chunk claims 4 GB once made the reader allocate what it
+/// claimed. The record limit refuses it, naming the file.
+#[test]
+fn an_mcap_chunk_that_claims_gigabytes_is_refused_not_allocated() {
+    let path = regressions_dir().join("gap_mcap").join("oom-chunk-claims-gigabytes.mcap");
+    let bytes = std::fs::read(&path).expect("the regression input");
+    let err = partscene::gap::mcap::mcap_to_csv(&bytes, &path, None, None).expect_err("refused").to_string();
+    assert!(err.contains("oom-chunk-claims-gigabytes.mcap") && err.contains("exceeds limit"), "{err}");
+}

@@ -28,7 +28,12 @@ pub enum GapError {
         found: String,
     },
     /// An MCAP recording cannot be read.
-    #[error("{}: topic {topic}{}: {message}", file.display(), index.map_or(String::new(), |i| format!(", message {i}")))]
+    #[error(
+        "{}{}{}: {message}",
+        file.display(),
+        if topic.is_empty() { String::new() } else { format!(": topic {topic}") },
+        index.map_or(String::new(), |i| format!(", message {i}"))
+    )]
     Mcap {
         /// The recording.
         file: PathBuf,

@@ -182,85 +182,143 @@ pub fn mcap_to_csv(bytes: &[u8], file: &Path, topic: Option<&str>, tf: Option<&T
 /// to the top of the link's TF tree, taken as the world), a row at each `/tf` message. Rows at the
 /// same stamp are merged. An error names the file, the topic and the message index.
 pub fn ros_to_csv(sources: &[McapSource<'_>], topic: Option<&str>, tf: Option<&TfFrames>) -> Result<String, GapError> {
-    let mut states = std::collections::BTreeSet::new();
-    let mut tf_topics = std::collections::BTreeSet::new();
+    let mut messages = Vec::new();
     for (file, bytes) in sources {
-        for (index, message) in ::mcap::MessageStream::new(bytes).map_err(|e| mcap_error(file, "", None, &e.to_string()))?.enumerate() {
-            let message = message.map_err(|e| mcap_error(file, "", Some(index), &e.to_string()))?;
-            match message.channel.schema.as_ref().map(|s| s.name.as_str()) {
-                Some(JOINT_STATE) => states.insert(message.channel.topic.clone()),
-                Some(TF_MESSAGE) => tf_topics.insert(message.channel.topic.clone()),
-                _ => false,
-            };
-        }
+        messages.extend(read_messages(bytes, file)?.into_iter().map(|m| (*file, m)));
     }
-    let states: Vec<String> = states.into_iter().collect();
+    let topics_of = |schema: &str| -> std::collections::BTreeSet<&str> {
+        messages.iter().filter(|(_, m)| m.schema.as_deref() == Some(schema)).map(|(_, m)| m.topic.as_str()).collect()
+    };
+    let states: Vec<String> = topics_of(JOINT_STATE).into_iter().map(str::to_owned).collect();
+    let tf_topics = topics_of(TF_MESSAGE);
     let poses_wanted = tf.is_some_and(|f| !f.tracked.is_empty()) && !tf_topics.is_empty();
     let file0 = sources.first().map_or(Path::new(""), |(f, _)| *f);
-    let joint_topic = match (topic, states.as_slice()) {
-        (Some(t), _) if states.iter().any(|x| x == t) => Some(t.to_owned()),
-        (Some(t), _) => {
-            return Err(mcap_error(
-                file0,
-                t,
-                None,
-                &format!("no {JOINT_STATE} messages on this topic; the file has them on: {}", list(&states)),
-            ));
-        }
-        (None, [only]) => Some(only.clone()),
-        (None, []) if poses_wanted => None,
-        (None, []) => {
-            let what = if tf.is_some() {
-                format!("no {JOINT_STATE} messages and no {TF_MESSAGE} of the model's links")
-            } else {
-                format!("no {JOINT_STATE} messages")
-            };
-            return Err(mcap_error(file0, "", None, &format!("{what} in the file")));
-        }
-        (None, many) => {
-            return Err(mcap_error(
-                file0,
-                "",
-                None,
-                &format!("{} JointState topics ({}): choose one with --topic", many.len(), list(many)),
-            ));
-        }
-    };
+    let joint_topic = choose_joint_topic(file0, topic, &states, poses_wanted, tf.is_some())?;
     let mut rows = Rows::default();
     let mut edges = TfEdges::default();
-    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
-    for (file, bytes) in sources {
-        let stream = ::mcap::MessageStream::new(bytes).map_err(|e| mcap_error(file, "", None, &e.to_string()))?;
-        for message in stream {
-            let message = message.map_err(|e| mcap_error(file, "", None, &e.to_string()))?;
-            let channel_topic = message.channel.topic.clone();
-            let is_joint = joint_topic.as_deref() == Some(channel_topic.as_str());
-            let is_tf = poses_wanted && tf_topics.contains(&channel_topic);
-            if !is_joint && !is_tf {
-                continue;
-            }
-            let index = counts.entry(channel_topic.clone()).or_default();
-            let at = *index;
-            *index += 1;
-            let bad = |m: &str| mcap_error(file, &channel_topic, Some(at), m);
-            if message.channel.message_encoding != "cdr" {
-                return Err(bad(&format!("message encoding {:?}: expected \"cdr\"", message.channel.message_encoding)));
-            }
-            let log_time_s = message.log_time as f64 * 1e-9;
-            if is_joint {
-                let state = decode_joint_state(&message.data).map_err(|e| bad(&e))?;
-                rows.joint_state(if state.stamp_s > 0.0 { state.stamp_s } else { log_time_s }, &state);
-            } else if let Some(frames) = tf {
-                let transforms = decode_tf_message(&message.data).map_err(|e| bad(&e))?;
-                let stamp = transforms.iter().map(|t| t.stamp_s).find(|t| *t > 0.0).unwrap_or(log_time_s);
-                edges.update(&transforms);
-                if !channel_topic.ends_with("tf_static") {
-                    rows.poses(stamp, &edges, frames);
-                }
+    let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+    for (file, message) in &messages {
+        let is_joint = joint_topic.as_deref() == Some(message.topic.as_str());
+        let is_tf = poses_wanted && tf_topics.contains(message.topic.as_str());
+        if !is_joint && !is_tf {
+            continue;
+        }
+        let index = counts.entry(message.topic.as_str()).or_default();
+        let at = *index;
+        *index += 1;
+        let bad = |m: &str| mcap_error(file, &message.topic, Some(at), m);
+        if message.encoding != "cdr" {
+            return Err(bad(&format!("message encoding {:?}: expected \"cdr\"", message.encoding)));
+        }
+        let log_time_s = message.log_time as f64 * 1e-9;
+        if is_joint {
+            let state = decode_joint_state(&message.data).map_err(|e| bad(&e))?;
+            rows.joint_state(if state.stamp_s > 0.0 { state.stamp_s } else { log_time_s }, &state);
+        } else if let Some(frames) = tf {
+            let transforms = decode_tf_message(&message.data).map_err(|e| bad(&e))?;
+            let stamp = transforms.iter().map(|t| t.stamp_s).find(|t| *t > 0.0).unwrap_or(log_time_s);
+            edges.update(&transforms);
+            if !message.topic.ends_with("tf_static") {
+                rows.poses(stamp, &edges, frames);
             }
         }
     }
     Ok(rows.csv())
+}
+
+/// The `JointState` topic read: `topic` when the file has it, else the only one; `None` when
+/// there is none but TF gives the poses wanted.
+fn choose_joint_topic(
+    file: &Path,
+    topic: Option<&str>,
+    states: &[String],
+    poses_wanted: bool,
+    with_tf: bool,
+) -> Result<Option<String>, GapError> {
+    match (topic, states) {
+        (Some(t), _) if states.iter().any(|x| x == t) => Ok(Some(t.to_owned())),
+        (Some(t), _) => {
+            Err(mcap_error(file, t, None, &format!("no {JOINT_STATE} messages on this topic; the file has them on: {}", list(states))))
+        }
+        (None, [only]) => Ok(Some(only.clone())),
+        (None, []) if poses_wanted => Ok(None),
+        (None, []) => {
+            let what = if with_tf {
+                format!("no {JOINT_STATE} messages and no {TF_MESSAGE} of the model's links")
+            } else {
+                format!("no {JOINT_STATE} messages")
+            };
+            Err(mcap_error(file, "", None, &format!("{what} in the file")))
+        }
+        (None, many) => {
+            Err(mcap_error(file, "", None, &format!("{} JointState topics ({}): choose one with --topic", many.len(), list(many))))
+        }
+    }
+}
+
+/// The largest record, or decompressed chunk, an MCAP file may hold here: `MCAP_EXPANSION` times
+/// the file's size, within [1 MiB, 256 MiB]. A chunk header is free to claim any uncompressed size,
+/// and the `mcap` crate's message stream allocates what it claims before checking (found by
+/// fuzzing: a 4 KB file asked for more than 2 GB); `JointState` and TF chunks compress a few times
+/// to some tens of times.
+pub const MAX_MCAP_RECORD_BYTES: usize = 256 << 20;
+/// See [`MAX_MCAP_RECORD_BYTES`].
+const MCAP_EXPANSION: usize = 64;
+
+/// One message of an MCAP file, with its channel's topic, schema name and encoding.
+struct RosMessage {
+    topic: String,
+    schema: Option<String>,
+    encoding: String,
+    log_time: u64,
+    data: Vec<u8>,
+}
+
+/// Every message of an MCAP file in file order (chunks decompressed, CRCs checked), records no
+/// larger than [`MAX_MCAP_RECORD_BYTES`] allows.
+fn read_messages(bytes: &[u8], file: &Path) -> Result<Vec<RosMessage>, GapError> {
+    use ::mcap::records::Record;
+    use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    let limit = bytes.len().saturating_mul(MCAP_EXPANSION).clamp(1 << 20, MAX_MCAP_RECORD_BYTES);
+    let options = LinearReaderOptions::default().with_record_length_limit(limit).with_validate_chunk_crcs(true);
+    let mut reader = LinearReader::new_with_options(options);
+    let fail = |e: &dyn std::fmt::Display| mcap_error(file, "", None, &e.to_string());
+    let mut rest = bytes;
+    let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
+    let mut channels: BTreeMap<u16, (String, u16, String)> = BTreeMap::new();
+    let mut out = Vec::new();
+    while let Some(event) = reader.next_event() {
+        match event.map_err(|e| fail(&e))? {
+            LinearReadEvent::ReadRequest(need) => {
+                let n = need.min(rest.len());
+                reader.insert(n).copy_from_slice(&rest[..n]);
+                reader.notify_read(n);
+                rest = &rest[n..];
+            }
+            LinearReadEvent::Record { data, opcode } => match ::mcap::parse_record(opcode, data).map_err(|e| fail(&e))? {
+                Record::Schema { header, .. } => {
+                    schemas.insert(header.id, header.name);
+                }
+                Record::Channel(c) => {
+                    channels.insert(c.id, (c.topic, c.schema_id, c.message_encoding));
+                }
+                Record::Message { header, data } => {
+                    let Some((topic, schema_id, encoding)) = channels.get(&header.channel_id) else {
+                        return Err(fail(&format!("a message on channel {} that no channel record declares", header.channel_id)));
+                    };
+                    out.push(RosMessage {
+                        topic: topic.clone(),
+                        schema: schemas.get(schema_id).cloned(),
+                        encoding: encoding.clone(),
+                        log_time: header.log_time,
+                        data: data.into_owned(),
+                    });
+                }
+                _ => {}
+            },
+        }
+    }
+    Ok(out)
 }
 
 /// The recording CSV of a rosbag2 folder with MCAP storage: its `.mcap` files in name order
