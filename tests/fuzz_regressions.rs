@@ -143,11 +143,19 @@ fn write_session_seeds() {
 }
 
 /// Issue 14, `gap_mcap`: a 4 KB MCAP whose chunk claims 4 GB once made the reader allocate what it
-/// claimed. The record limit refuses it, naming the file.
+/// claimed, and a 2 KB one whose zstd chunk stops short of its declared size spun the `mcap`
+/// crate's inflation forever. Both are refused at once, naming the file and what is wrong.
 #[test]
-fn an_mcap_chunk_that_claims_gigabytes_is_refused_not_allocated() {
-    let path = regressions_dir().join("gap_mcap").join("oom-chunk-claims-gigabytes.mcap");
-    let bytes = std::fs::read(&path).expect("the regression input");
-    let err = partscene::gap::mcap::mcap_to_csv(&bytes, &path, None, None).expect_err("refused").to_string();
-    assert!(err.contains("oom-chunk-claims-gigabytes.mcap") && err.contains("exceeds limit"), "{err}");
+fn mcap_chunks_that_claim_too_much_or_stop_short_are_refused() {
+    for (name, expected) in [
+        ("oom-chunk-claims-gigabytes.mcap", "a record of 4294967296 bytes"),
+        ("hang-zstd-chunk-stops-short.mcap", "bytes uncompressed, more than the 1048576 allowed"),
+    ] {
+        let path = regressions_dir().join("gap_mcap").join(name);
+        let bytes = std::fs::read(&path).expect("the regression input");
+        let started = Instant::now();
+        let err = partscene::gap::mcap::mcap_to_csv(&bytes, &path, None, None).expect_err("refused").to_string();
+        assert!(err.contains(name) && err.contains(expected), "{err}");
+        assert!(started.elapsed() < Duration::from_secs(1), "{name}: {:?}", started.elapsed());
+    }
 }

@@ -274,19 +274,18 @@ struct RosMessage {
     data: Vec<u8>,
 }
 
-/// Every message of an MCAP file in file order (chunks decompressed, CRCs checked), records no
-/// larger than [`MAX_MCAP_RECORD_BYTES`] allows.
+/// Every message of an MCAP file in file order (chunks inflated here, [`inflate_chunk`]), records
+/// no larger than [`MAX_MCAP_RECORD_BYTES`] allows.
 fn read_messages(bytes: &[u8], file: &Path) -> Result<Vec<RosMessage>, GapError> {
     use ::mcap::records::Record;
     use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
     let limit = bytes.len().saturating_mul(MCAP_EXPANSION).clamp(1 << 20, MAX_MCAP_RECORD_BYTES);
-    let options = LinearReaderOptions::default().with_record_length_limit(limit).with_validate_chunk_crcs(true);
+    // Chunks come out whole: the crate's own inflation can loop forever on a bad stream.
+    let options = LinearReaderOptions::default().with_record_length_limit(limit).with_emit_chunks(true);
     let mut reader = LinearReader::new_with_options(options);
     let fail = |e: &dyn std::fmt::Display| mcap_error(file, "", None, &e.to_string());
     let mut rest = bytes;
-    let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
-    let mut channels: BTreeMap<u16, (String, u16, String)> = BTreeMap::new();
-    let mut out = Vec::new();
+    let mut state = McapContents::default();
     while let Some(event) = reader.next_event() {
         match event.map_err(|e| fail(&e))? {
             LinearReadEvent::ReadRequest(need) => {
@@ -296,27 +295,93 @@ fn read_messages(bytes: &[u8], file: &Path) -> Result<Vec<RosMessage>, GapError>
                 rest = &rest[n..];
             }
             LinearReadEvent::Record { data, opcode } => match ::mcap::parse_record(opcode, data).map_err(|e| fail(&e))? {
-                Record::Schema { header, .. } => {
-                    schemas.insert(header.id, header.name);
+                Record::Chunk { header, data } => {
+                    let inflated = inflate_chunk(&header.compression, &data, header.uncompressed_size, limit).map_err(|e| fail(&e))?;
+                    for (op, body) in chunk_records(&inflated).map_err(|e| fail(&e))? {
+                        state.take(::mcap::parse_record(op, body).map_err(|e| fail(&e))?).map_err(|e| fail(&e))?;
+                    }
                 }
-                Record::Channel(c) => {
-                    channels.insert(c.id, (c.topic, c.schema_id, c.message_encoding));
-                }
-                Record::Message { header, data } => {
-                    let Some((topic, schema_id, encoding)) = channels.get(&header.channel_id) else {
-                        return Err(fail(&format!("a message on channel {} that no channel record declares", header.channel_id)));
-                    };
-                    out.push(RosMessage {
-                        topic: topic.clone(),
-                        schema: schemas.get(schema_id).cloned(),
-                        encoding: encoding.clone(),
-                        log_time: header.log_time,
-                        data: data.into_owned(),
-                    });
-                }
-                _ => {}
+                record => state.take(record).map_err(|e| fail(&e))?,
             },
         }
+    }
+    Ok(state.messages)
+}
+
+/// Schemas and channels seen so far, and the messages on them.
+#[derive(Default)]
+struct McapContents {
+    schemas: BTreeMap<u16, String>,
+    channels: BTreeMap<u16, (String, u16, String)>,
+    messages: Vec<RosMessage>,
+}
+
+impl McapContents {
+    fn take(&mut self, record: ::mcap::records::Record<'_>) -> Result<(), String> {
+        use ::mcap::records::Record;
+        match record {
+            Record::Schema { header, .. } => {
+                self.schemas.insert(header.id, header.name);
+            }
+            Record::Channel(c) => {
+                self.channels.insert(c.id, (c.topic, c.schema_id, c.message_encoding));
+            }
+            Record::Message { header, data } => {
+                let Some((topic, schema_id, encoding)) = self.channels.get(&header.channel_id) else {
+                    return Err(format!("a message on channel {} that no channel record declares", header.channel_id));
+                };
+                self.messages.push(RosMessage {
+                    topic: topic.clone(),
+                    schema: self.schemas.get(schema_id).cloned(),
+                    encoding: encoding.clone(),
+                    log_time: header.log_time,
+                    data: data.into_owned(),
+                });
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+/// A chunk's records, inflated: exactly `uncompressed_size` bytes (at most `limit`) or an error.
+/// Written here rather than left to the `mcap` crate, whose streaming inflation spins forever
+/// when a stream stops making progress before its declared size.
+fn inflate_chunk(compression: &str, data: &[u8], uncompressed_size: u64, limit: usize) -> Result<Vec<u8>, String> {
+    use std::io::Read as _;
+    let size = usize::try_from(uncompressed_size)
+        .ok()
+        .filter(|&n| n <= limit)
+        .ok_or_else(|| format!("a chunk declares {uncompressed_size} bytes uncompressed, more than the {limit} allowed for this file"))?;
+    let out = match compression {
+        "" => data.to_vec(),
+        "zstd" => zstd::bulk::decompress(data, size).map_err(|e| format!("zstd chunk: {e}"))?,
+        "lz4" => {
+            let mut out = Vec::new();
+            let decoder = lz4::Decoder::new(data).map_err(|e| format!("lz4 chunk: {e}"))?;
+            // One byte past the declared size shows a chunk that holds more than it says.
+            decoder.take(size as u64 + 1).read_to_end(&mut out).map_err(|e| format!("lz4 chunk: {e}"))?;
+            out
+        }
+        other => return Err(format!("chunk compression {other:?}: expected none, zstd or lz4")),
+    };
+    if out.len() != size {
+        return Err(format!("a chunk declares {size} bytes uncompressed and holds {}", out.len()));
+    }
+    Ok(out)
+}
+
+/// The records of an inflated chunk: opcode, then a little-endian u64 length, then the body.
+fn chunk_records(bytes: &[u8]) -> Result<Vec<(u8, &[u8])>, String> {
+    let mut out = Vec::new();
+    let mut at = 0;
+    while at < bytes.len() {
+        let head = bytes.get(at..at + 9).ok_or_else(|| format!("a record header cut off at byte {at} of a chunk"))?;
+        let len = u64::from_le_bytes(head[1..9].try_into().map_err(|_| "a record length".to_owned())?);
+        let end = usize::try_from(len).ok().and_then(|n| (at + 9).checked_add(n)).filter(|&e| e <= bytes.len());
+        let end = end.ok_or_else(|| format!("a record of {len} bytes at byte {at} of a chunk of {}", bytes.len()))?;
+        out.push((head[0], &bytes[at + 9..end]));
+        at = end;
     }
     Ok(out)
 }
