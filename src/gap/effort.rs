@@ -531,18 +531,23 @@ pub fn in_serial_chain(model: &GapModel, j: usize) -> bool {
     movable_below || movable_above
 }
 
-/// 1.4826 · MAD of the finite values.
+/// Median (the upper middle value) of the finite values; 0 when there are none.
 #[must_use]
-pub fn robust_scale(v: &[f64]) -> f64 {
+pub fn median(v: &[f64]) -> f64 {
     let mut x: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
     if x.is_empty() {
         return 0.0;
     }
     x.sort_by(f64::total_cmp);
-    let med = x[x.len() / 2];
-    let mut d: Vec<f64> = x.iter().map(|v| (v - med).abs()).collect();
-    d.sort_by(f64::total_cmp);
-    1.4826 * d[d.len() / 2]
+    x[x.len() / 2]
+}
+
+/// 1.4826 · MAD of the finite values.
+#[must_use]
+pub fn robust_scale(v: &[f64]) -> f64 {
+    let med = median(v);
+    let d: Vec<f64> = v.iter().filter(|x| x.is_finite()).map(|x| (x - med).abs()).collect();
+    1.4826 * median(&d)
 }
 
 /// Multipliers of a joint's RMS speed for the transition speeds tried (smooth Coulomb).

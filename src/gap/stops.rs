@@ -6,7 +6,7 @@
 //! regression, and the restitution is read off the measured positions around each short impact.
 
 use super::effects::{Effect, EffectKind};
-use super::effort::robust_scale;
+use super::effort::{median, robust_scale};
 
 /// What the evidence must show.
 #[derive(Debug, Clone, Copy)]
@@ -91,16 +91,6 @@ pub fn find_stops(
         });
     }
     out
-}
-
-/// Median of the finite values (0 when there are none).
-fn median(v: &[f64]) -> f64 {
-    let mut x: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if x.is_empty() {
-        return 0.0;
-    }
-    x.sort_by(f64::total_cmp);
-    x[x.len() / 2]
 }
 
 /// Median of |speed out| / |speed in| over short visits (impacts that bounce off); 0 when the
