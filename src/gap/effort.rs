@@ -111,7 +111,22 @@ pub struct Bandwidth {
     pub narrow_s: f64,
 }
 
+/// Shortest and longest piece of a held-out replay, s ([`Bandwidth::held_out_horizon_s`]).
+pub const HELD_OUT_HORIZON_S: (f64, f64) = (0.25, 2.0);
+
 impl Bandwidth {
+    /// Length of each piece of a chain's held-out replay: one period of the motion's dominant
+    /// frequency, within [`HELD_OUT_HORIZON_S`]. Each piece starts from the measured state: over
+    /// seconds a chain's open-loop replay drifts from any model (a double pendulum is chaotic, an
+    /// arm driven by torques falls away under gravity), and a long tail would measure that drift,
+    /// not the fitted physics. (A joint alone on its body is stable: its held-out part stays one
+    /// open-loop replay, where a small damping adds up over seconds and shows.)
+    #[must_use]
+    pub fn held_out_horizon_s(&self) -> f64 {
+        let (lo, hi) = HELD_OUT_HORIZON_S;
+        if self.motion_hz > 0.0 { (1.0 / self.motion_hz).clamp(lo, hi) } else { hi }
+    }
+
     /// Time on either side of a sample that its filtered terms draw on.
     #[must_use]
     pub fn support_s(&self) -> f64 {

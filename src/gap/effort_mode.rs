@@ -255,15 +255,18 @@ pub(super) fn analyze_effort_space(
     let (tree, body_of_link) = model.multibody()?;
     let recorded: Vec<Vec<f64>> = dofs.iter().map(|&j| (0..n).map(|i| rec.effort(&model.joints[j].name, i)).collect()).collect();
     let input = ChainInput { time_s: &rec.time_s, effort: &recorded, gravity };
-    let q0: Vec<f64> = sig.q.iter().map(|s| s[0][0]).map(|v| if v.is_finite() { v } else { 0.0 }).collect();
-    let v0: Vec<f64> = sig.q.iter().map(|s| s[0][1]).map(|v| if v.is_finite() { v } else { 0.0 }).collect();
+    // The whole recording is replayed open loop from its start (the plots), the held-out part in
+    // pieces from the measured state ([`Bandwidth::held_out_horizon_s`]).
+    let start = replay_start(&sig, rec.time_s.first().copied().unwrap_or(0.0));
+    let horizon_s = band.held_out_horizon_s();
     let (nominal_physics, _) = fitted_physics(model, &tree, &body_of_link, &BTreeMap::new());
-    let before = replay(&tree, &nominal_physics, &input, &q0, &v0);
+    let before = replay_from(&tree, &nominal_physics, &input, &sig, start);
     let (physics, tree_fitted) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(&findings));
-    let after = replay(&tree_fitted, &physics, &input, &q0, &v0);
+    let after = replay_from(&tree_fitted, &physics, &input, &sig, start);
+    let held_before = replay_pieces(&tree, &nominal_physics, &input, &sig, t_split, horizon_s);
     let held = train_findings.as_ref().map(|f| {
         let (p, t) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(f));
-        replay(&t, &p, &input, &q0, &v0)
+        replay_pieces(&t, &p, &input, &sig, t_split, horizon_s)
     });
 
     let mut out = Vec::with_capacity(rows.len());
@@ -271,7 +274,8 @@ pub(super) fn analyze_effort_space(
     for f in &findings {
         let d = dofs.iter().position(|&x| x == f.joint).unwrap_or(0);
         let y = &positions[d];
-        let replays = Replays { before: &before[d], after: &after[d], held: held.as_ref().map(|h| h[d].as_slice()) };
+        let replays =
+            Replays { before: &before[d], after: &after[d], held_before: &held_before[d], held: held.as_ref().map(|h| h[d].as_slice()) };
         let mut outcome = joint_outcome(&band, model, rec, cfg, &rules, f, y, &replays, gravity, t_split);
         if in_serial_chain(model, f.joint) {
             out.push(outcome);
@@ -296,7 +300,58 @@ pub(super) fn analyze_effort_space(
 struct Replays<'a> {
     before: &'a [f64],
     after: &'a [f64],
+    /// The model as written, replayed from the start of the held-out part.
+    held_before: &'a [f64],
+    /// The model fitted before the held-out part, replayed from its start.
     held: Option<&'a [f64]>,
+}
+
+/// The first sample at or after `t_s` whose smoothing window lies inside the recording, with
+/// every dof's smoothed state finite: a replay starts there. (At the very first samples the
+/// differentiating windows are one-sided or too short; a replay that started from a state
+/// missing there started at rest at zero, whatever the recording did.)
+fn replay_start(sig: &Signals, t_s: f64) -> Option<usize> {
+    let t0 = sig.time_s.first().copied().unwrap_or(0.0);
+    let from = t_s.max(t0 + sig.band.half_width_s);
+    (0..sig.time_s.len()).find(|&i| sig.time_s[i] >= from && sig.q.iter().all(|d| d[i][0].is_finite() && d[i][1].is_finite()))
+}
+
+/// Replays from `from_s` to the end in pieces of `horizon_s`, each from the smoothed measured
+/// state at its start (NaN before `from_s`).
+fn replay_pieces(
+    tree: &MultiBody,
+    physics: &[JointPhysics],
+    input: &ChainInput<'_>,
+    sig: &Signals,
+    from_s: f64,
+    horizon_s: f64,
+) -> Vec<Vec<f64>> {
+    let n = input.time_s.len();
+    let mut out = vec![vec![f64::NAN; n]; sig.q.len()];
+    let mut next = replay_start(sig, from_s);
+    while let Some(s) = next {
+        let end = input.time_s.partition_point(|&t| t < input.time_s[s] + horizon_s).clamp(s + 1, n);
+        let effort: Vec<Vec<f64>> = input.effort.iter().map(|e| e.get(s..end).map_or_else(Vec::new, <[f64]>::to_vec)).collect();
+        let piece = ChainInput { time_s: &input.time_s[s..end], effort: &effort, gravity: input.gravity };
+        let q0: Vec<f64> = sig.q.iter().map(|d| d[s][0]).collect();
+        let v0: Vec<f64> = sig.q.iter().map(|d| d[s][1]).collect();
+        for (d, q) in replay(tree, physics, &piece, &q0, &v0).into_iter().enumerate() {
+            out[d][s..end].copy_from_slice(&q);
+        }
+        next = if end < n { replay_start(sig, input.time_s[end]).filter(|&i| i >= end) } else { None };
+    }
+    out
+}
+
+/// A replay from sample `start`'s smoothed state (NaN before it; all NaN without a start).
+fn replay_from(tree: &MultiBody, physics: &[JointPhysics], input: &ChainInput<'_>, sig: &Signals, start: Option<usize>) -> Vec<Vec<f64>> {
+    let n = input.time_s.len();
+    let Some(s) = start else { return vec![vec![f64::NAN; n]; sig.q.len()] };
+    let q0: Vec<f64> = sig.q.iter().map(|d| d[s][0]).collect();
+    let v0: Vec<f64> = sig.q.iter().map(|d| d[s][1]).collect();
+    let effort: Vec<Vec<f64>> = input.effort.iter().map(|e| e.get(s..).map_or_else(Vec::new, <[f64]>::to_vec)).collect();
+    let tail = ChainInput { time_s: &input.time_s[s..], effort: &effort, gravity: input.gravity };
+    replay(tree, physics, &tail, &q0, &v0).into_iter().map(|d| std::iter::repeat_n(f64::NAN, s).chain(d).collect()).collect()
 }
 
 fn joint_outcome(
@@ -356,7 +411,7 @@ fn joint_outcome(
         });
     }
     let (all, sq) = rmse_pair(y, replays.before, replays.after, |_| true);
-    let held = replays.held.map_or_else(RmsePair::default, |h| rmse_pair(y, replays.before, h, |i| rec.time_s[i] >= t_split).0);
+    let held = replays.held.map_or_else(RmsePair::default, |h| rmse_pair(y, replays.held_before, h, |i| rec.time_s[i] >= t_split).0);
     let noise = super::locate::noise_sigma(&rec.time_s, y);
     let series = JointSeries::new(&joint.name, unit, &rec.time_s, y, replays.before.to_vec(), replays.after.to_vec(), noise);
     let analysis = report::JointAnalysis {
