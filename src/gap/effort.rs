@@ -46,6 +46,11 @@ pub struct SelectionRules {
     /// than the upper bound times its model is a wrong model, not a missing effect; such a fit is
     /// not reported as a heavier part.
     pub mass_scale_range: (f64, f64),
+    /// Largest break-away level of a Stribeck law, as a multiple of its sliding level. Static
+    /// friction of real contacts exceeds sliding friction by tens of percent, rarely more than
+    /// twice (Armstrong-Hélouvry's survey of friction in machines); a fitted "break-away" of ten
+    /// times the sliding level is a speed-shaped bump standing in for something else.
+    pub max_breakaway_ratio: f64,
     /// Half-width of the first, wide smoothing pass that measures the motion's frequency, s (the
     /// window used is then chosen from it, [`bandwidth`]).
     pub smoothing_half_width_s: f64,
@@ -62,6 +67,7 @@ impl Default for SelectionRules {
             smoothing_half_width_s: 0.1,
             mass_scale_range: (0.5, 3.0),
             min_mass_change: 0.1,
+            max_breakaway_ratio: 3.0,
         }
     }
 }
@@ -909,7 +915,9 @@ impl EffortProblem<'_> {
         match e.kind {
             EffectKind::MassScale => (lo..=hi).contains(&e.params[0]) && (e.params[0] - 1.0).abs() >= self.rules.min_mass_change,
             EffectKind::CoulombFriction => e.params[0] >= 0.0 && e.params[2].nan_or_nonneg(),
-            EffectKind::StribeckFriction => e.params[0] >= 0.0 && e.params[1] > e.params[0],
+            EffectKind::StribeckFriction => {
+                e.params[0] >= 0.0 && e.params[1] > e.params[0] && e.params[1] <= self.rules.max_breakaway_ratio * e.params[0]
+            }
             EffectKind::ViscousDamping | EffectKind::Armature | EffectKind::SoftClose | EffectKind::Spring => e.params[0] >= 0.0,
             _ => true,
         }
@@ -1076,7 +1084,10 @@ impl EffortProblem<'_> {
         }
         for ((row, kind), (v, _)) in best {
             let why = if !v.plausible {
-                "its fitted parameters are not physical or not material (a negative level; a part within 10 % of, or far from, its modelled weight)".to_owned()
+                format!(
+                    "its fitted parameters are not physical or not material (a negative level; a part within 10 % of, or far from, its modelled weight; a break-away beyond {}× the sliding friction)",
+                    self.rules.max_breakaway_ratio
+                )
             } else if v.effort_share < self.rules.min_effort_share {
                 format!("{:.1} % of the joint's own effort — too small to matter", 100.0 * v.effort_share)
             } else if v.gain < self.rules.min_cv_gain {

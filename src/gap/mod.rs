@@ -587,14 +587,17 @@ fn effort_share(e: &Effect, joint: &model::GapJoint, terms: &[model::JointTerms]
     (term / count as f64).sqrt() / scale.max(1e-12)
 }
 
-/// Whether a refined effect is nothing: a weight change below materiality, or a level within two
-/// standard deviations of the level that means no effect.
+/// Whether a refined effect is nothing: a weight change below materiality, a level within two
+/// standard deviations of the level that means no effect, or a Stribeck break-away beyond
+/// [`effort::SelectionRules::max_breakaway_ratio`] × its sliding level.
 fn not_material(e: &Effect, std: &[f64], rules: &effort::SelectionRules) -> bool {
     let level = e.params.first().copied().unwrap_or(f64::NAN);
     let sd = std.first().copied().unwrap_or(f64::NAN);
     match e.kind {
         EffectKind::MassScale => (level - 1.0).abs() < rules.min_mass_change || (sd.is_finite() && (level - 1.0).abs() < 2.0 * sd),
         EffectKind::EndStop | EffectKind::Unknown => false,
+        // A break-away far above the sliding level is no static friction (see the rule).
+        EffectKind::StribeckFriction if e.params.get(1).is_some_and(|b| *b > rules.max_breakaway_ratio * level) => true,
         _ => sd.is_finite() && level.abs() < 2.0 * sd,
     }
 }
