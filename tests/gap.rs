@@ -661,3 +661,26 @@ fn a_real_double_pendulum_gets_no_speed_shaped_bump_for_friction() {
     }
     assert!(report.fit.rmse_after < 0.25 * report.fit.rmse_before, "replay {} -> {} rad", report.fit.rmse_before, report.fit.rmse_after);
 }
+
+/// A heavier knob turning about its own centre of mass: gravity does no work on it, so a rotor's
+/// inertia explains the recording exactly as well, and the report says so beside the heavier
+/// part it names.
+#[test]
+fn a_heavier_knob_says_a_rotors_inertia_would_explain_it_as_well() {
+    let model = parse_model(DOOR_AND_KNOB, Path::new("microwave.urdf")).expect("model parses");
+    let cfg = GenerateConfig {
+        duration_s: 8.0,
+        seed: 7,
+        effects: vec![("knob_joint".to_owned(), TrueEffect::ExtraInertia { scale: 2.0 })],
+        ..GenerateConfig::default()
+    };
+    let rec = parse_recording(&generate_recording(&model, &cfg).expect("generates"), Path::new("gen.csv")).expect("parses");
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{}", e.joint, e.kind)).collect();
+    let inertia = report.effects.iter().find(|e| e.joint == "knob_joint" && ["mass_scale", "armature"].contains(&e.kind.as_str()));
+    let inertia = inertia.unwrap_or_else(|| panic!("the knob's extra inertia is named: {found:?}"));
+    let other = if inertia.kind == "mass_scale" { "armature" } else { "mass_scale" };
+    let rejected = &report.joints["knob_joint"].rejected;
+    let note = format!("{other}: explains the recording as well as the reported {}", inertia.kind);
+    assert!(rejected.iter().any(|r| r.starts_with(&note)), "{rejected:?}");
+}

@@ -842,6 +842,10 @@ impl EffortProblem<'_> {
 /// Fewest held-out samples for a fold to count in the fold share.
 const MIN_FOLD_SAMPLES: usize = 10;
 
+/// Largest relative rise of the held-out error at which a rotor's inertia and a heavier part
+/// count as the same explanation ([`EffortProblem::look_alike`]).
+const LOOK_ALIKE_SSE_SHARE: f64 = 0.01;
+
 /// How a candidate fared against the current model.
 #[derive(Debug, Clone, Copy)]
 struct Verdict {
@@ -1066,6 +1070,44 @@ impl EffortProblem<'_> {
             .collect()
     }
 
+    /// When candidate c (a rotor's inertia or a heavier part) explains the recording as well as
+    /// its chosen look-alike on the same joint, in place of it: what the report should say
+    /// about the other reading. The two differ only through gravity's work on the joint; where
+    /// that is nil (a knob or turntable turning about its centre of mass, a horizontal drawer),
+    /// no recording can tell them apart, and a user who knows the mechanism must choose.
+    fn look_alike(&self, chosen: &[usize], fitted: &Evaluation, c: usize) -> Option<String> {
+        let cand = &self.candidates[c];
+        let twin_kind = match cand.kind {
+            EffectKind::Armature => EffectKind::MassScale,
+            EffectKind::MassScale => EffectKind::Armature,
+            _ => return None,
+        };
+        let &twin = chosen.iter().find(|&&x| self.candidates[x].row == cand.row && self.candidates[x].kind == twin_kind)?;
+        let swapped: Vec<usize> = chosen.iter().copied().filter(|&x| x != twin).chain([c]).collect();
+        let e = self.evaluate(&swapped);
+        let mut rows = self.rows_of(c);
+        rows.extend(self.rows_of(twin));
+        rows.sort_unstable();
+        rows.dedup();
+        let sse = |ev: &Evaluation| rows.iter().map(|&r| ev.row_sse(r)).sum::<f64>();
+        let (mine, theirs) = (sse(fitted), sse(&e));
+        let as_good = theirs.is_finite() && theirs <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE);
+        if !as_good || !self.plausible(c, &e.theta) {
+            return None;
+        }
+        let value = self.effect_of(c, &e.theta).params[0];
+        let reading = match cand.kind {
+            EffectKind::Armature => format!("a rotor's inertia of {value:.3e} kg·m² (or kg)"),
+            _ => format!("a part {value:.3} × as heavy as modelled"),
+        };
+        Some(format!(
+            "explains the recording as well as the reported {} (held-out error {:+.1} %): gravity does next to no work on this joint, so \
+             the recording cannot tell a heavier part from a rotor's inertia; the other reading is {reading}",
+            twin_kind.name(),
+            100.0 * (theirs - mine) / mine.max(f64::MIN_POSITIVE)
+        ))
+    }
+
     /// For every kind not chosen on a joint, its best variant added to the final model, and why
     /// it was not reported.
     fn explain_rejections(&self, chosen: &[usize], fitted: &Evaluation, findings: &mut [JointFinding]) {
@@ -1082,8 +1124,10 @@ impl EffortProblem<'_> {
                 *entry = (v, c);
             }
         }
-        for ((row, kind), (v, _)) in best {
-            let why = if !v.plausible {
+        for ((row, kind), (v, c)) in best {
+            let why = if let Some(why) = self.look_alike(chosen, fitted, c) {
+                why
+            } else if !v.plausible {
                 format!(
                     "its fitted parameters are not physical or not material (a negative level; a part within 10 % of, or far from, its modelled weight; a break-away beyond {}× the sliding friction)",
                     self.rules.max_breakaway_ratio
