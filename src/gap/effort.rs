@@ -56,6 +56,15 @@ pub struct SelectionRules {
     pub smoothing_half_width_s: f64,
 }
 
+impl SelectionRules {
+    /// Whether a Stribeck law's break-away level lies beyond [`Self::max_breakaway_ratio`] × its
+    /// sliding level.
+    #[must_use]
+    pub fn breakaway_beyond_ratio(&self, sliding: f64, breakaway: f64) -> bool {
+        breakaway > self.max_breakaway_ratio * sliding
+    }
+}
+
 impl Default for SelectionRules {
     fn default() -> Self {
         Self {
@@ -920,7 +929,7 @@ impl EffortProblem<'_> {
             EffectKind::MassScale => (lo..=hi).contains(&e.params[0]) && (e.params[0] - 1.0).abs() >= self.rules.min_mass_change,
             EffectKind::CoulombFriction => e.params[0] >= 0.0 && e.params[2].nan_or_nonneg(),
             EffectKind::StribeckFriction => {
-                e.params[0] >= 0.0 && e.params[1] > e.params[0] && e.params[1] <= self.rules.max_breakaway_ratio * e.params[0]
+                e.params[0] >= 0.0 && e.params[1] > e.params[0] && !self.rules.breakaway_beyond_ratio(e.params[0], e.params[1])
             }
             EffectKind::ViscousDamping | EffectKind::Armature | EffectKind::SoftClose | EffectKind::Spring => e.params[0] >= 0.0,
             _ => true,

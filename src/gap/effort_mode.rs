@@ -331,13 +331,7 @@ fn replay_pieces(
     let mut next = replay_start(sig, from_s);
     while let Some(s) = next {
         let end = input.time_s.partition_point(|&t| t < input.time_s[s] + horizon_s).clamp(s + 1, n);
-        let effort: Vec<Vec<f64>> = input.effort.iter().map(|e| e.get(s..end).map_or_else(Vec::new, <[f64]>::to_vec)).collect();
-        let piece = ChainInput { time_s: &input.time_s[s..end], effort: &effort, gravity: input.gravity };
-        let q0: Vec<f64> = sig.q.iter().map(|d| d[s][0]).collect();
-        let v0: Vec<f64> = sig.q.iter().map(|d| d[s][1]).collect();
-        for (d, q) in replay(tree, physics, &piece, &q0, &v0).into_iter().enumerate() {
-            out[d][s..end].copy_from_slice(&q);
-        }
+        replay_span(tree, physics, input, sig, s..end, &mut out);
         next = if end < n { replay_start(sig, input.time_s[end]).filter(|&i| i >= end) } else { None };
     }
     out
@@ -346,12 +340,30 @@ fn replay_pieces(
 /// A replay from sample `start`'s smoothed state (NaN before it; all NaN without a start).
 fn replay_from(tree: &MultiBody, physics: &[JointPhysics], input: &ChainInput<'_>, sig: &Signals, start: Option<usize>) -> Vec<Vec<f64>> {
     let n = input.time_s.len();
-    let Some(s) = start else { return vec![vec![f64::NAN; n]; sig.q.len()] };
+    let mut out = vec![vec![f64::NAN; n]; sig.q.len()];
+    if let Some(s) = start {
+        replay_span(tree, physics, input, sig, s..n, &mut out);
+    }
+    out
+}
+
+/// Replays samples `span` from the smoothed state at its first sample into `out[d][span]`.
+fn replay_span(
+    tree: &MultiBody,
+    physics: &[JointPhysics],
+    input: &ChainInput<'_>,
+    sig: &Signals,
+    span: std::ops::Range<usize>,
+    out: &mut [Vec<f64>],
+) {
+    let s = span.start;
+    let effort: Vec<Vec<f64>> = input.effort.iter().map(|e| e.get(span.clone()).map_or_else(Vec::new, <[f64]>::to_vec)).collect();
+    let piece = ChainInput { time_s: &input.time_s[span.clone()], effort: &effort, gravity: input.gravity };
     let q0: Vec<f64> = sig.q.iter().map(|d| d[s][0]).collect();
     let v0: Vec<f64> = sig.q.iter().map(|d| d[s][1]).collect();
-    let effort: Vec<Vec<f64>> = input.effort.iter().map(|e| e.get(s..).map_or_else(Vec::new, <[f64]>::to_vec)).collect();
-    let tail = ChainInput { time_s: &input.time_s[s..], effort: &effort, gravity: input.gravity };
-    replay(tree, physics, &tail, &q0, &v0).into_iter().map(|d| std::iter::repeat_n(f64::NAN, s).chain(d).collect()).collect()
+    for (d, q) in replay(tree, physics, &piece, &q0, &v0).into_iter().enumerate() {
+        out[d][span.clone()].copy_from_slice(&q);
+    }
 }
 
 fn joint_outcome(

@@ -597,7 +597,7 @@ fn not_material(e: &Effect, std: &[f64], rules: &effort::SelectionRules) -> bool
         EffectKind::MassScale => (level - 1.0).abs() < rules.min_mass_change || (sd.is_finite() && (level - 1.0).abs() < 2.0 * sd),
         EffectKind::EndStop | EffectKind::Unknown => false,
         // A break-away far above the sliding level is no static friction (see the rule).
-        EffectKind::StribeckFriction if e.params.get(1).is_some_and(|b| *b > rules.max_breakaway_ratio * level) => true,
+        EffectKind::StribeckFriction if e.params.get(1).is_some_and(|&b| rules.breakaway_beyond_ratio(level, b)) => true,
         _ => sd.is_finite() && level.abs() < 2.0 * sd,
     }
 }
