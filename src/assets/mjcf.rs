@@ -346,7 +346,7 @@ impl Reader {
     }
 
     fn read(mut self, root: &Elem) -> Result<ArticulatedAsset, AssetError> {
-        self.asset.links.push(AssetLink { name: "world".into(), world_from_link: Pose::IDENTITY, geoms: Vec::new() });
+        self.asset.links.push(AssetLink { name: "world".into(), named: true, world_from_link: Pose::IDENTITY, geoms: Vec::new() });
         self.body_count = 1;
         for wb in root.children_named("worldbody") {
             self.walk(wb, 0, Pose::IDENTITY, None, true)?;
@@ -384,11 +384,12 @@ impl Reader {
     fn body(&mut self, b: &Elem, parent: usize, world_from_parent: Pose, inherited_class: Option<&str>) -> Result<(), AssetError> {
         let id = self.body_count;
         self.body_count += 1;
+        let named = b.attr("name").is_some();
         let name = b.attr("name").map_or_else(|| format!("body{id}"), str::to_owned);
         let world_from_body = world_from_parent * self.local_pose(&own_attrs(b))?;
         let childclass = b.attr("childclass").or(inherited_class);
         let index = self.asset.links.len();
-        self.asset.links.push(AssetLink { name: name.clone(), world_from_link: world_from_body, geoms: Vec::new() });
+        self.asset.links.push(AssetLink { name: name.clone(), named, world_from_link: world_from_body, geoms: Vec::new() });
         let parent_name = self.asset.links[parent].name.clone();
 
         let mut joints = Vec::new();

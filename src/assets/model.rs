@@ -25,6 +25,9 @@ pub struct ArticulatedAsset {
 #[derive(Clone, Debug)]
 pub struct AssetLink {
     pub name: String,
+    /// Whether the file gave the link its name. A name the reader made up for an unnamed body
+    /// (MJCF `body7`) says nothing about what the part is, and is never read as a label.
+    pub named: bool,
     /// The link frame in the model root frame at q = 0.
     pub world_from_link: Pose,
     /// Visual and collision geometry, in the model root frame.

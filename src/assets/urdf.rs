@@ -164,7 +164,7 @@ pub fn parse_urdf(text: &str, path: &Path, base_dir: &Path, fallback_name: &str)
                 Err(message) => asset.warnings.push(Warning::new("assets", format!("link {}", link.name), message)),
             }
         }
-        asset.links.push(AssetLink { name: link.name.clone(), world_from_link, geoms });
+        asset.links.push(AssetLink { name: link.name.clone(), named: true, world_from_link, geoms });
     }
     Ok(asset)
 }

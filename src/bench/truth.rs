@@ -68,6 +68,8 @@ pub fn category_from_file_name(path: &std::path::Path) -> String {
 /// A link with geometry (or a grip split off one), before placement.
 struct Raw<'a> {
     link: &'a str,
+    /// The file named the link ([`AssetLink::named`]): only then is its name a label.
+    named: bool,
     shapes: Vec<Primitive>,
     meshes: Vec<TruthMesh>,
     /// A grip split off the link before it in `raws` ([`split_grip`]): labelled `handle`, fixed
@@ -145,10 +147,10 @@ pub fn asset_truth(asset: &ArticulatedAsset, options: &AssetTruthOptions) -> Res
         let (rest, grip) = split_grip(link, &geoms).unwrap_or((geoms, Vec::new()));
         let (shapes, meshes) = solids_of(&rest);
         if !shapes.is_empty() || !meshes.is_empty() {
-            raws.push(Raw { link: &link.name, shapes, meshes, grip: false });
+            raws.push(Raw { link: &link.name, named: link.named, shapes, meshes, grip: false });
             let (shapes, meshes) = solids_of(&grip);
             if !shapes.is_empty() || !meshes.is_empty() {
-                raws.push(Raw { link: &link.name, shapes, meshes, grip: true });
+                raws.push(Raw { link: &link.name, named: link.named, shapes, meshes, grip: true });
             }
         }
     }
@@ -212,7 +214,7 @@ pub fn asset_truth(asset: &ArticulatedAsset, options: &AssetTruthOptions) -> Res
         let id = i as PartId + 1;
         let is_root = id == main_root;
         let joint_name = chain.first().map(|j| j.name.as_str());
-        let label = if raw.grip { "handle".to_owned() } else { coarse_label(raw.link, joint_name, is_root) };
+        let label = if raw.grip { "handle".to_owned() } else { coarse_label(if raw.named { raw.link } else { "" }, joint_name, is_root) };
         let shapes = raw.shapes.iter().map(|s| Primitive::new(s.kind, s.size, world_from_asset * s.world_from_primitive)).collect();
         let meshes = raw
             .meshes
@@ -284,6 +286,7 @@ mod tests {
     fn link(name: &str, boxes: &[(Vec3, Vec3)]) -> AssetLink {
         AssetLink {
             name: name.into(),
+            named: true,
             world_from_link: Pose::IDENTITY,
             geoms: boxes
                 .iter()
@@ -393,6 +396,23 @@ mod tests {
         grip.geoms.push(AssetGeom::mesh(&mesh, vec![[0, 1, 2]], Pose::IDENTITY, GeomRole::Visual).named(["handle_vis"]));
         let preferred = grip.preferred_geoms();
         assert!(split_grip(&grip, &preferred).is_none());
+    }
+
+    #[test]
+    fn an_unnamed_sliding_sash_is_labelled_from_its_joint_not_the_readers_name() {
+        // Meta-World's window: the sash body has no name, so the MJCF reader calls it `body2`,
+        // which holds the base word `body`; the sash was made fixed. Its joint's name speaks.
+        let xml = r#"<mujoco><worldbody>
+            <body name="frame"><geom type="box" size="0.2 0.03 0.25" pos="0 0 0.25"/>
+              <body pos="0 -0.03 0.05"><joint name="window_slide" type="slide" axis="0 0 1" range="0 0.2"/>
+                <geom type="box" size="0.15 0.012 0.1" pos="0 0 0.1"/></body>
+            </body></worldbody></mujoco>"#;
+        let asset = crate::assets::mjcf::parse_mjcf(xml, std::path::Path::new("window.xml")).expect("parses");
+        let sash = asset.links.iter().find(|l| !l.named).expect("the reader names the unnamed body");
+        assert!(sash.name.starts_with("body"), "{}", sash.name);
+        let out = asset_truth(&asset, &AssetTruthOptions::default()).expect("truth");
+        let labels: Vec<&str> = out.truth.objects[0].parts.iter().map(|p| p.label.as_str()).collect();
+        assert_eq!(labels, ["frame", "slide"], "labelled from `window_slide`");
     }
 
     #[test]

@@ -188,6 +188,10 @@ pub struct JointPhysics {
     pub lower: Option<f64>,
     /// Model limits.
     pub upper: Option<f64>,
+    /// Coefficient of restitution of the model's own limits (0: they stop the joint dead). Not an
+    /// effect: how the modelled stops bounce, which no URDF says; fitted where a recording hits
+    /// them ([`crate::gap`]'s held-out replays).
+    pub limit_restitution: f64,
 }
 
 impl JointPhysics {
@@ -211,6 +215,7 @@ impl JointPhysics {
             closed_end: joint.lower.unwrap_or(0.0),
             lower: joint.lower,
             upper: joint.upper,
+            limit_restitution: 0.0,
         }
     }
 

@@ -948,8 +948,44 @@ impl EffortProblem<'_> {
                 break;
             }
         }
+        self.prefer_inertia_alone(&mut chosen);
         chosen.sort_unstable();
         chosen
+    }
+
+    /// The spec's rule: a heavier part (`mass_scale`) is inertia and weight together; inertia
+    /// alone is `armature`. Where a rotor's inertia on the same joint explains the recording as
+    /// well (gravity does next to no work on it: a knob turning about its centre of mass, a
+    /// horizontal drawer), the weight was never seen, so the narrower reading is reported and
+    /// the heavier part is named as the other reading among the rejected.
+    fn prefer_inertia_alone(&self, chosen: &mut Vec<usize>) {
+        let heavier: Vec<usize> = chosen.iter().copied().filter(|&c| self.candidates[c].kind == EffectKind::MassScale).collect();
+        for m in heavier {
+            let fitted = self.evaluate(chosen);
+            let row = self.candidates[m].row;
+            let rotor =
+                (0..self.candidates.len()).find(|&c| self.candidates[c].row == row && self.candidates[c].kind == EffectKind::Armature);
+            if let Some((swapped, _, _)) = rotor.and_then(|a| self.as_good_in_place(chosen, &fitted, a, m)) {
+                *chosen = swapped;
+            }
+        }
+    }
+
+    /// Candidate c put in place of `twin` in `chosen`: the new set and the relative rise of the
+    /// held-out error on the rows of both, when c is physical and the rise is within
+    /// [`LOOK_ALIKE_SSE_SHARE`].
+    fn as_good_in_place(&self, chosen: &[usize], fitted: &Evaluation, c: usize, twin: usize) -> Option<(Vec<usize>, Evaluation, f64)> {
+        let swapped: Vec<usize> = chosen.iter().copied().filter(|&x| x != twin).chain([c]).collect();
+        let e = self.evaluate(&swapped);
+        let mut rows = self.rows_of(c);
+        rows.extend(self.rows_of(twin));
+        rows.sort_unstable();
+        rows.dedup();
+        let sse = |ev: &Evaluation| rows.iter().map(|&r| ev.row_sse(r)).sum::<f64>();
+        let (mine, theirs) = (sse(fitted), sse(&e));
+        let as_good = theirs.is_finite() && theirs <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE);
+        let rise = (theirs - mine) / mine.max(f64::MIN_POSITIVE);
+        (as_good && self.plausible(c, &e.theta)).then_some((swapped, e, rise))
     }
 
     /// Adds (or swaps within a family) the candidate that passes and cuts the held-out error most,
@@ -1092,18 +1128,7 @@ impl EffortProblem<'_> {
             _ => return None,
         };
         let &twin = chosen.iter().find(|&&x| self.candidates[x].row == cand.row && self.candidates[x].kind == twin_kind)?;
-        let swapped: Vec<usize> = chosen.iter().copied().filter(|&x| x != twin).chain([c]).collect();
-        let e = self.evaluate(&swapped);
-        let mut rows = self.rows_of(c);
-        rows.extend(self.rows_of(twin));
-        rows.sort_unstable();
-        rows.dedup();
-        let sse = |ev: &Evaluation| rows.iter().map(|&r| ev.row_sse(r)).sum::<f64>();
-        let (mine, theirs) = (sse(fitted), sse(&e));
-        let as_good = theirs.is_finite() && theirs <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE);
-        if !as_good || !self.plausible(c, &e.theta) {
-            return None;
-        }
+        let (_, e, rise) = self.as_good_in_place(chosen, fitted, c, twin)?;
         let value = self.effect_of(c, &e.theta).params[0];
         let reading = match cand.kind {
             EffectKind::Armature => format!("a rotor's inertia of {value:.3e} kg·m² (or kg)"),
@@ -1111,9 +1136,10 @@ impl EffortProblem<'_> {
         };
         Some(format!(
             "explains the recording as well as the reported {} (held-out error {:+.1} %): gravity does next to no work on this joint, so \
-             the recording cannot tell a heavier part from a rotor's inertia; the other reading is {reading}",
+             the recording cannot tell a heavier part from a rotor's inertia (inertia alone is reported as armature, weight unseen); \
+             the other reading is {reading}",
             twin_kind.name(),
-            100.0 * (theirs - mine) / mine.max(f64::MIN_POSITIVE)
+            100.0 * rise
         ))
     }
 

@@ -35,13 +35,26 @@ impl<'a> Problem<'a> {
     /// samples each; a short tail joins the previous segment).
     #[must_use]
     pub fn new(input: SimInput<'a>, y: &'a [f64], use_sample: &[bool], sigma: f64, joint: &'a GapJoint) -> Self {
+        Self::with_segments_of(input, y, use_sample, sigma, joint, SEGMENT_S)
+    }
+
+    /// The same with segments of about `segment_s` seconds.
+    #[must_use]
+    pub fn with_segments_of(
+        input: SimInput<'a>,
+        y: &'a [f64],
+        use_sample: &[bool],
+        sigma: f64,
+        joint: &'a GapJoint,
+        segment_s: f64,
+    ) -> Self {
         let used: Vec<usize> = (0..y.len()).filter(|&i| use_sample[i] && y[i].is_finite()).collect();
         let mut segments: Vec<Span> = Vec::new();
         let mut rows: Vec<Vec<usize>> = Vec::new();
         let mut k = 0;
         while k < used.len() {
             let start = used[k];
-            let t_end = input.time_s[start] + SEGMENT_S;
+            let t_end = input.time_s[start] + segment_s;
             let mut e = k;
             while e + 1 < used.len() && input.time_s[used[e + 1]] < t_end {
                 e += 1;
@@ -103,6 +116,13 @@ const HORIZONS_S: [f64; 4] = [0.15, 0.4, 1.0, f64::INFINITY];
 /// horizons (continuation), starting from `states`.
 #[must_use]
 pub fn refine_states(problem: &Problem<'_>, physics: &JointPhysics, states: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    refine_states_within(problem, physics, states, f64::INFINITY)
+}
+
+/// [`refine_states`] on the samples within `max_horizon_s` of each segment's start only: the
+/// state a prediction starts from, measured at the start and not fitted to what it predicts.
+#[must_use]
+pub fn refine_states_within(problem: &Problem<'_>, physics: &JointPhysics, states: &[(f64, f64)], max_horizon_s: f64) -> Vec<(f64, f64)> {
     let mut out = states.to_vec();
     let mut buf = Vec::new();
     for (k, span) in problem.segments.iter().enumerate() {
@@ -115,7 +135,9 @@ pub fn refine_states(problem: &Problem<'_>, physics: &JointPhysics, states: &[(f
         if z2 <= 2.0 * problem.rows[k].len() as f64 {
             continue;
         }
-        for horizon in HORIZONS_S {
+        let mut horizons: Vec<f64> = HORIZONS_S.iter().map(|h| h.min(max_horizon_s)).collect();
+        horizons.dedup();
+        for horizon in horizons {
             let rows: Vec<usize> = problem.rows[k].iter().copied().filter(|&i| problem.input.time_s[i] - t0 <= horizon).collect();
             if rows.len() < 3 {
                 continue;

@@ -106,10 +106,10 @@ fn step_events(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64
             }
         };
         if let Some(lo) = p.lower {
-            consider(lo, Event::Stop(lo, 0.0, false), Some(false));
+            consider(lo, Event::Stop(lo, p.limit_restitution, false), Some(false));
         }
         if let Some(hi) = p.upper {
-            consider(hi, Event::Stop(hi, 0.0, true), Some(true));
+            consider(hi, Event::Stop(hi, p.limit_restitution, true), Some(true));
         }
         for s in &p.stops {
             consider(s.position, Event::Stop(s.position, s.restitution, s.blocks_upward), Some(s.blocks_upward));
@@ -217,6 +217,7 @@ mod tests {
             closed_end: 0.0,
             lower: None,
             upper: None,
+            limit_restitution: 0.0,
         }
     }
 
