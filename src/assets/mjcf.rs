@@ -346,7 +346,7 @@ impl Reader {
     }
 
     fn read(mut self, root: &Elem) -> Result<ArticulatedAsset, AssetError> {
-        self.asset.links.push(AssetLink { name: "world".into(), named: true, world_from_link: Pose::IDENTITY, geoms: Vec::new() });
+        self.asset.links.push(AssetLink { name: "world".into(), named: false, world_from_link: Pose::IDENTITY, geoms: Vec::new() });
         self.body_count = 1;
         for wb in root.children_named("worldbody") {
             self.walk(wb, 0, Pose::IDENTITY, None, true)?;

@@ -90,7 +90,7 @@ const GRIP_MARGIN_M: f32 = 0.003;
 /// grips themselves, and links whose geometry would be all grip, are not split (`None`).
 fn split_grip<'g>(link: &'g AssetLink, preferred: &[&'g AssetGeom]) -> Option<(Vec<&'g AssetGeom>, Vec<&'g AssetGeom>)> {
     let vocab = Vocabulary::builtin();
-    if vocab.is_grip(&coarse_label(&link.name, None, false)) {
+    if vocab.is_grip(&coarse_label(if link.named { &link.name } else { "" }, None, false)) {
         return None;
     }
     let named_grip = |g: &AssetGeom| g.names.iter().any(|n| vocab.is_grip(n));
@@ -408,8 +408,9 @@ mod tests {
                 <geom type="box" size="0.15 0.012 0.1" pos="0 0 0.1"/></body>
             </body></worldbody></mujoco>"#;
         let asset = crate::assets::mjcf::parse_mjcf(xml, std::path::Path::new("window.xml")).expect("parses");
-        let sash = asset.links.iter().find(|l| !l.named).expect("the reader names the unnamed body");
-        assert!(sash.name.starts_with("body"), "{}", sash.name);
+        let made_up: Vec<&str> = asset.links.iter().filter(|l| !l.named).map(|l| l.name.as_str()).collect();
+        assert_eq!(made_up.len(), 2, "the world and the sash: {made_up:?}");
+        assert!(made_up.contains(&"world") && made_up.iter().any(|n| n.starts_with("body")), "{made_up:?}");
         let out = asset_truth(&asset, &AssetTruthOptions::default()).expect("truth");
         let labels: Vec<&str> = out.truth.objects[0].parts.iter().map(|p| p.label.as_str()).collect();
         assert_eq!(labels, ["frame", "slide"], "labelled from `window_slide`");

@@ -199,9 +199,22 @@ impl JointPhysics {
     #[must_use]
     pub fn nominal(joint: &GapJoint) -> Self {
         Self {
-            kind: joint.kind,
             damping: joint.damping,
             friction: joint.friction,
+            closed_end: joint.lower.unwrap_or(0.0),
+            lower: joint.lower,
+            upper: joint.upper,
+            ..Self::free(joint.kind)
+        }
+    }
+
+    /// A joint of `kind` with nothing on it: no damping, friction or limits.
+    #[must_use]
+    pub fn free(kind: DofKind) -> Self {
+        Self {
+            kind,
+            damping: 0.0,
+            friction: 0.0,
             friction_shape: FrictionShape::default(),
             effort_offset: 0.0,
             armature: 0.0,
@@ -212,9 +225,9 @@ impl JointPhysics {
             mass_scale: 1.0,
             stops: Vec::new(),
             soft_close: None,
-            closed_end: joint.lower.unwrap_or(0.0),
-            lower: joint.lower,
-            upper: joint.upper,
+            closed_end: 0.0,
+            lower: None,
+            upper: None,
             limit_restitution: 0.0,
         }
     }

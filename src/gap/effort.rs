@@ -963,8 +963,10 @@ impl EffortProblem<'_> {
         for m in heavier {
             let fitted = self.evaluate(chosen);
             let row = self.candidates[m].row;
-            let rotor =
-                (0..self.candidates.len()).find(|&c| self.candidates[c].row == row && self.candidates[c].kind == EffectKind::Armature);
+            // Not where a rotor's inertia is already named beside the heavier part.
+            let rotor = (0..self.candidates.len())
+                .find(|&c| self.candidates[c].row == row && self.candidates[c].kind == EffectKind::Armature)
+                .filter(|_| !chosen.iter().any(|&c| self.candidates[c].row == row && self.candidates[c].kind == EffectKind::Armature));
             if let Some((swapped, _, _)) = rotor.and_then(|a| self.as_good_in_place(chosen, &fitted, a, m)) {
                 *chosen = swapped;
             }

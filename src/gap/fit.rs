@@ -128,11 +128,13 @@ pub fn refine_states_within(problem: &Problem<'_>, physics: &JointPhysics, state
     for (k, span) in problem.segments.iter().enumerate() {
         let t0 = problem.input.time_s[span.start];
         let mut state = out[k];
-        // A segment already at the noise level keeps its state (most segments of a good fit).
+        // A segment already at the noise level (over the samples the state is measured on) keeps
+        // its state (most segments of a good fit).
         buf.resize(span.end - span.start + 1, 0.0);
         simulate(&problem.input, physics, span.start, span.end, state.0, state.1, &mut buf);
-        let z2: f64 = problem.rows[k].iter().map(|&i| ((problem.y[i] - buf[i - span.start]) / problem.sigma).powi(2)).sum();
-        if z2 <= 2.0 * problem.rows[k].len() as f64 {
+        let measured: Vec<usize> = problem.rows[k].iter().copied().filter(|&i| problem.input.time_s[i] - t0 <= max_horizon_s).collect();
+        let z2: f64 = measured.iter().map(|&i| ((problem.y[i] - buf[i - span.start]) / problem.sigma).powi(2)).sum();
+        if z2 <= 2.0 * measured.len() as f64 {
             continue;
         }
         let mut horizons: Vec<f64> = HORIZONS_S.iter().map(|h| h.min(max_horizon_s)).collect();

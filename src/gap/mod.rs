@@ -16,6 +16,7 @@ mod effort_mode;
 pub mod error;
 pub mod fit;
 pub mod generate;
+mod held_out;
 pub mod locate;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod mcap;
@@ -358,8 +359,8 @@ fn analyze_joint(
                 (effort_unexplained && !spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma).then(select_here);
             // The alternative must prove itself on data it was not fitted to.
             let better = alternative.as_ref().is_some_and(|(alt, _)| {
-                let mine = held_out(rec, input, y, sigma, joint, &refined.effects, t_split).rmse_after;
-                let theirs = held_out(rec, input, y, sigma, joint, &alt.effects, t_split).rmse_after;
+                let mine = held_out::held_out(rec, input, y, sigma, joint, &refined.effects, t_split).rmse_after;
+                let theirs = held_out::held_out(rec, input, y, sigma, joint, &alt.effects, t_split).rmse_after;
                 theirs * FALLBACK_HELD_OUT_GAIN < mine
             });
             if let Some(alt) = alternative.filter(|_| better) {
@@ -413,7 +414,7 @@ fn analyze_joint(
             (refit, conf)
         }
     };
-    let mut held = held_out(rec, input, y, sigma, joint, &chosen.effects, t_split);
+    let mut held = held_out::held_out(rec, input, y, sigma, joint, &chosen.effects, t_split);
     let (chosen, confidence) = if given.is_none() && !chosen.effects.is_empty() && held.rmse_after >= held.rmse_before {
         let kinds: Vec<&str> = chosen.effects.iter().map(|e| e.kind.name()).collect();
         rejected_here.push(format!(
@@ -481,9 +482,7 @@ fn analyze_joint(
     let start = problem.segments.first().map_or(0, |s| s.start);
     let everywhere = vec![true; n];
     let replay = |physics: &JointPhysics, state: Option<(f64, f64)>| {
-        let state = state.unwrap_or((y[start], 0.0));
-        let physics = with_limit_restitution(&input, y, &everywhere, physics, start, state);
-        (open_loop_from(&input, &physics, start, state), physics.limit_restitution)
+        held_out::replay_with_bounce(&input, y, &everywhere, sigma, physics, start, state.unwrap_or((y[start], 0.0)))
     };
     let (before_sim, _) = replay(&nominal_physics, nominal.states.first().copied());
     let (after_sim, bounce) = replay(&fitted_physics, chosen.states.first().copied());
@@ -500,13 +499,9 @@ fn analyze_joint(
             a
         },
     );
-    if bounce > 0.0 {
-        let sep = if analysis.why.is_empty() { "" } else { "; " };
-        let _ = write!(
-            analysis.why,
-            "{sep}replays let the model's own limits bounce with restitution {bounce:.2}, as the recording does where it hits them \
-             (how a stop bounces is no effect and no URDF says it)"
-        );
+    if let Some(note) = held_out::bounce_note(bounce) {
+        analysis.why.push_str(if analysis.why.is_empty() { "" } else { "; " });
+        analysis.why.push_str(&note);
     }
     JointOutcome { mismatches, effects, all: all_pair, held, sq, series, analysis }
 }
@@ -524,113 +519,6 @@ const POSITION_MODEL_FORM_SHARE: f64 = 0.02;
 
 /// Parameters that are positions (no relative floor).
 const POSITION_PARAMS: [&str; 4] = ["rest_position", "equilibrium_position", "position", "engage_position"];
-
-/// Held-out RMSE of the model as written and with `effects`: both fitted on the samples before
-/// `t_split`, simulated open loop through the rest.
-fn held_out(
-    rec: &Recording,
-    input: SimInput<'_>,
-    y: &[f64],
-    sigma: f64,
-    joint: &model::GapJoint,
-    effects: &[Effect],
-    t_split: f64,
-) -> RmsePair {
-    let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
-    let train_problem = fit::Problem::new(input, y, &train, sigma, joint);
-    if train_problem.segments.is_empty() {
-        return RmsePair::default();
-    }
-    let nominal_t = fit::fit(&train_problem, &[], None, None, 25);
-    let chosen_t =
-        if effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, effects, Some(&free_mask(effects)), None, 25) };
-    let (nominal, fitted) = (JointPhysics::nominal(joint), JointPhysics::with_effects(joint, &chosen_t.effects));
-    let (b, a) = if let Some(horizon_s) = unstable_horizon_s(&input, y, &train) {
-        let held: Vec<bool> = train.iter().map(|t| !t).collect();
-        let pieces = fit::Problem::with_segments_of(input, y, &held, sigma, joint, horizon_s);
-        (replay_pieces(&pieces, &nominal), replay_pieces(&pieces, &fitted))
-    } else {
-        let s0 = train_problem.segments[0].start;
-        let replay = |physics: &JointPhysics, state: (f64, f64)| {
-            let physics = with_limit_restitution(&input, y, &train, physics, s0, state);
-            open_loop_from(&input, &physics, s0, state)
-        };
-        (replay(&nominal, nominal_t.states[0]), replay(&fitted, chosen_t.states[0]))
-    };
-    rmse_pair(y, &b, &a, |i| rec.time_s[i] >= t_split).0
-}
-
-/// Restitutions of the model's own limits tried ([`with_limit_restitution`]).
-const LIMIT_RESTITUTIONS: [f64; 6] = [0.0, 0.05, 0.1, 0.15, 0.2, 0.3];
-
-/// `physics` with the restitution of the model's limits that replays the training samples best
-/// (open loop from `start`), the first on ties: where the recording never reaches a limit, 0.
-fn with_limit_restitution(
-    input: &SimInput<'_>,
-    y: &[f64],
-    train: &[bool],
-    physics: &JointPhysics,
-    start: usize,
-    state: (f64, f64),
-) -> JointPhysics {
-    let mut best: Option<(f64, JointPhysics)> = None;
-    for r in LIMIT_RESTITUTIONS {
-        let p = JointPhysics { limit_restitution: r, ..physics.clone() };
-        let sim = open_loop_from(input, &p, start, state);
-        let (sse, _) = rmse_mask(y, &sim, |i| train[i]);
-        if best.as_ref().is_none_or(|(b, _)| sse < *b * (1.0 - 1e-9)) {
-            best = Some((sse, p));
-        }
-    }
-    best.map_or_else(|| physics.clone(), |(_, p)| p)
-}
-
-/// E-folds an open-loop replay of a mechanism that gravity drives away from where it is (a lid
-/// held open by a constant effort) may diverge over before it measures the divergence rather
-/// than the model.
-const HELD_OUT_E_FOLDS: f64 = 2.0;
-
-/// Shortest held-out piece, seconds: an effect must have time to show.
-const MIN_HELD_OUT_PIECE_S: f64 = 0.25;
-
-/// For a joint whose recorded motion gravity makes unstable (linearised: inertia · δa =
-/// gravity'(q) · δq with gravity' > 0, so errors grow as e^{λt}, λ = √(gravity'/inertia)), the
-/// length of the held-out pieces, [`HELD_OUT_E_FOLDS`] / λ (at least [`MIN_HELD_OUT_PIECE_S`]);
-/// `None` where the typical (median) sample is stable or neutral, or the held-out part is no
-/// longer than a piece: there one open-loop replay from the start of the training part measures
-/// the model, and a small damping shows only over seconds.
-fn unstable_horizon_s(input: &SimInput<'_>, y: &[f64], train: &[bool]) -> Option<f64> {
-    let mut rates: Vec<f64> = (0..y.len())
-        .filter(|&i| train[i] && y[i].is_finite())
-        .map(|i| {
-            let (t, q) = (&input.terms[i], y[i]);
-            let slope = t.gravity_sin * q.cos() - t.gravity_cos * q.sin();
-            (slope / t.inertia.max(1e-12)).max(0.0).sqrt()
-        })
-        .collect();
-    if rates.is_empty() {
-        return None;
-    }
-    rates.sort_by(f64::total_cmp);
-    let rate = rates[rates.len() / 2];
-    let horizon_s = (HELD_OUT_E_FOLDS / rate).max(MIN_HELD_OUT_PIECE_S);
-    let held_s = input.time_s.last()? - input.time_s.iter().zip(train).find(|(_, t)| !**t).map(|(s, _)| *s)?;
-    (horizon_s < held_s).then_some(horizon_s)
-}
-
-/// Each piece of `pieces` replayed open loop from the state measured at its start (fitted on
-/// the first samples of the piece only).
-fn replay_pieces(pieces: &fit::Problem<'_>, physics: &JointPhysics) -> Vec<f64> {
-    let states = fit::refine_states_within(pieces, physics, &pieces.data_states(), START_STATE_HORIZON_S);
-    let mut out = vec![f64::NAN; pieces.y.len()];
-    for (span, state) in pieces.segments.iter().zip(states) {
-        sim::simulate(&pieces.input, physics, span.start, span.end, state.0, state.1, &mut out[span.start..=span.end]);
-    }
-    out
-}
-
-/// Samples after a held-out piece's start on which its starting state is measured, seconds.
-const START_STATE_HORIZON_S: f64 = 0.15;
 
 /// How much better on held-out data a structure chosen in position space must be than the one
 /// effort space chose, to replace it.
@@ -904,75 +792,4 @@ pub fn write_outputs(dir: &Path, model: &GapModel, report: &GapReport) -> Result
         put(&format!("plot_{safe}.svg"), plot::joint_svg(s).as_bytes())?;
     }
     Ok(written)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The held-out piece length for a joint held at `q_rad` for 10 s (the first 7 s training),
-    /// with gravity effort `gravity_cos`·cos q + `gravity_sin`·sin q and inertia 0.01.
-    fn check(gravity_cos: f64, gravity_sin: f64, q_rad: f64, expected_s: Option<f64>) {
-        let n = 1001;
-        let time_s: Vec<f64> = (0..n).map(|i| 0.01 * i as f64).collect();
-        let effort = vec![0.0; n];
-        let terms = vec![model::JointTerms { inertia: 0.01, gravity_cos, gravity_sin, ..model::JointTerms::default() }; n];
-        let y = vec![q_rad; n];
-        let train: Vec<bool> = time_s.iter().map(|&t| t < 7.0).collect();
-        let got = unstable_horizon_s(&SimInput { time_s: &time_s, effort: &effort, terms: &terms }, &y, &train);
-        match (got, expected_s) {
-            (Some(g), Some(e)) => assert!((g - e).abs() < 1e-9, "{g} vs {e}"),
-            _ => assert_eq!(got, expected_s),
-        }
-    }
-
-    #[test]
-    fn a_drawer_bouncing_off_its_modelled_limit_replays_with_the_bounce() {
-        // A 2 kg drawer pushed shut at 0.3 m/s into its modelled lower limit, which bounces it
-        // back with restitution 0.2 (an engine's soft limit); pulled once more later.
-        let n = 600;
-        let time_s: Vec<f64> = (0..n).map(|i| 0.005 * i as f64).collect();
-        let effort: Vec<f64> = (0..n).map(|i| if (400..420).contains(&i) { 5.0 } else { 0.0 }).collect();
-        let terms = vec![model::JointTerms { inertia: 2.0, ..model::JointTerms::default() }; n];
-        let input = SimInput { time_s: &time_s, effort: &effort, terms: &terms };
-        let nominal = JointPhysics {
-            kind: model::DofKind::Prismatic,
-            damping: 0.0,
-            friction: 0.0,
-            friction_shape: effects::FrictionShape::default(),
-            effort_offset: 0.0,
-            armature: 0.0,
-            stiffness: 0.0,
-            rest_position: 0.0,
-            tilt_amplitude: 0.0,
-            tilt_equilibrium: 0.0,
-            mass_scale: 1.0,
-            stops: Vec::new(),
-            soft_close: None,
-            closed_end: 0.0,
-            lower: Some(0.0),
-            upper: Some(0.5),
-            limit_restitution: 0.0,
-        };
-        let truth = JointPhysics { limit_restitution: 0.2, ..nominal.clone() };
-        let y = open_loop_from(&input, &truth, 0, (0.1, -0.3));
-        let all = vec![true; n];
-        assert!((with_limit_restitution(&input, &y, &all, &nominal, 0, (0.1, -0.3)).limit_restitution - 0.2).abs() < 1e-12);
-        // Before it reaches the limit, nothing tells how the limit bounces: it stays dead.
-        let early: Vec<bool> = (0..n).map(|i| i < 40).collect();
-        assert!(with_limit_restitution(&input, &y, &early, &nominal, 0, (0.1, -0.3)).limit_restitution.abs() < 1e-12);
-    }
-
-    #[test]
-    fn held_out_replays_of_a_lid_held_open_run_in_pieces_of_two_e_folds() {
-        // A lid of 1 N·m weight, held open at 0.6 rad: gravity′ = sin 0.6, λ = √(sin 0.6 / 0.01).
-        check(-1.0, 0.0, 0.6, Some(HELD_OUT_E_FOLDS / (0.6f64.sin() / 0.01).sqrt()));
-        // A light lid diverges slowly: the piece is longer than the held-out part, one replay.
-        check(-1e-4, 0.0, 0.6, None);
-        // Hanging pendulums and drawers are stable or neutral.
-        check(0.0, -1.0, 0.1, None);
-        check(0.0, 0.0, 0.3, None);
-        // A fast divergence still leaves a piece of at least MIN_HELD_OUT_PIECE_S.
-        check(-1e4, 0.0, 0.6, Some(MIN_HELD_OUT_PIECE_S));
-    }
 }

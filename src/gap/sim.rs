@@ -200,25 +200,7 @@ mod tests {
     use crate::gap::model::DofKind;
 
     fn free_joint() -> JointPhysics {
-        JointPhysics {
-            kind: DofKind::Continuous,
-            damping: 0.0,
-            friction: 0.0,
-            friction_shape: crate::gap::effects::FrictionShape::default(),
-            effort_offset: 0.0,
-            armature: 0.0,
-            stiffness: 0.0,
-            rest_position: 0.0,
-            tilt_amplitude: 0.0,
-            tilt_equilibrium: 0.0,
-            mass_scale: 1.0,
-            stops: Vec::new(),
-            soft_close: None,
-            closed_end: 0.0,
-            lower: None,
-            upper: None,
-            limit_restitution: 0.0,
-        }
+        JointPhysics::free(DofKind::Continuous)
     }
 
     #[test]

@@ -1,0 +1,241 @@
+//! Replays of a lone joint (one joint alone on its body, position space): the held-out test of
+//! its effects, and how the model's own limits bounce in every replay.
+//!
+//! - The held-out part is replayed open loop from the start of the training part, except where
+//!   gravity makes the recorded motion unstable (a lid held open by an effort falls whichever way
+//!   it is nudged): there an open-loop replay over seconds measures that divergence rather than
+//!   the model, so the held-out part is replayed in pieces, each from the state measured on its
+//!   first samples, and only the rest of each piece is scored.
+//! - A limit in the model stops the joint; how it bounces no URDF says, and an engine's soft
+//!   limit or a real rubber stop throws the joint back at a fraction of its speed. Where the
+//!   recording reaches a limit, the replay takes the restitution that replays it best. It is no
+//!   effect and is never reported as one (the effects themselves are fitted with dead limits).
+
+use super::effects::{Effect, JointPhysics};
+use super::fit;
+use super::model::GapJoint;
+use super::recording::Recording;
+use super::report::RmsePair;
+use super::sim::{self, SimInput};
+use super::{free_mask, open_loop_from, rmse_mask, rmse_pair};
+
+/// Held-out RMSE of the model as written and with `effects`: both fitted on the samples before
+/// `t_split`, then replayed through the rest (open loop, or in pieces where gravity makes the
+/// motion unstable: [`unstable_horizon_s`]), with the limits bouncing as the training part shows.
+pub(super) fn held_out(
+    rec: &Recording,
+    input: SimInput<'_>,
+    y: &[f64],
+    sigma: f64,
+    joint: &GapJoint,
+    effects: &[Effect],
+    t_split: f64,
+) -> RmsePair {
+    let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
+    let train_problem = fit::Problem::new(input, y, &train, sigma, joint);
+    if train_problem.segments.is_empty() {
+        return RmsePair::default();
+    }
+    let nominal_t = fit::fit(&train_problem, &[], None, None, 25);
+    let chosen_t =
+        if effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, effects, Some(&free_mask(effects)), None, 25) };
+    let s0 = train_problem.segments[0].start;
+    let bouncing = |physics: &JointPhysics, state: (f64, f64)| {
+        let r = limit_restitution(&input, y, &train, sigma, physics, s0, state);
+        JointPhysics { limit_restitution: r, ..physics.clone() }
+    };
+    let nominal = bouncing(&JointPhysics::nominal(joint), nominal_t.states[0]);
+    let fitted = bouncing(&JointPhysics::with_effects(joint, &chosen_t.effects), chosen_t.states[0]);
+    let (b, a) = if let Some(horizon_s) = unstable_horizon_s(&input, y, &train) {
+        let held: Vec<bool> = train.iter().map(|t| !t).collect();
+        let pieces = fit::Problem::with_segments_of(input, y, &held, sigma, joint, horizon_s);
+        (replay_pieces(&pieces, &nominal), replay_pieces(&pieces, &fitted))
+    } else {
+        (open_loop_from(&input, &nominal, s0, nominal_t.states[0]), open_loop_from(&input, &fitted, s0, chosen_t.states[0]))
+    };
+    rmse_pair(y, &b, &a, |i| rec.time_s[i] >= t_split).0
+}
+
+/// `physics` replayed open loop from `start` with the model's limits bouncing as the samples
+/// `mask` selects show ([`limit_restitution`]); the replay and the restitution it used.
+pub(super) fn replay_with_bounce(
+    input: &SimInput<'_>,
+    y: &[f64],
+    mask: &[bool],
+    sigma: f64,
+    physics: &JointPhysics,
+    start: usize,
+    state: (f64, f64),
+) -> (Vec<f64>, f64) {
+    let r = limit_restitution(input, y, mask, sigma, physics, start, state);
+    (open_loop_from(input, &JointPhysics { limit_restitution: r, ..physics.clone() }, start, state), r)
+}
+
+/// What the report says about a restitution the replays used, if any.
+pub(super) fn bounce_note(restitution: f64) -> Option<String> {
+    (restitution > 0.0).then(|| {
+        format!(
+            "replays let the model's own limits bounce with restitution {restitution:.2}, as the recording does where it reaches \
+             them (how a stop bounces is no effect and no URDF says it)"
+        )
+    })
+}
+
+/// Restitutions of the model's own limits tried ([`limit_restitution`]).
+const LIMIT_RESTITUTIONS: [f64; 6] = [0.0, 0.05, 0.1, 0.15, 0.2, 0.3];
+
+/// Noise σs within which a measured position counts as at a limit.
+const AT_LIMIT_SIGMAS: f64 = 3.0;
+
+/// The restitution of the model's limits (from [`LIMIT_RESTITUTIONS`], the first on ties) that
+/// replays the samples `mask` selects best, open loop from `start`; 0 where none of those samples
+/// reaches a limit (nothing says how it bounces: a replay that drifts into a limit the
+/// recording never touches must not get a bounce fitted to its drift).
+fn limit_restitution(
+    input: &SimInput<'_>,
+    y: &[f64],
+    mask: &[bool],
+    sigma: f64,
+    physics: &JointPhysics,
+    start: usize,
+    state: (f64, f64),
+) -> f64 {
+    let band = AT_LIMIT_SIGMAS * sigma;
+    let reaches = |i: usize| {
+        mask[i]
+            && y[i].is_finite()
+            && (physics.lower.is_some_and(|lo| y[i] <= lo + band) || physics.upper.is_some_and(|hi| y[i] >= hi - band))
+    };
+    if !(0..y.len()).any(reaches) {
+        return 0.0;
+    }
+    let mut best: Option<(f64, f64)> = None;
+    for r in LIMIT_RESTITUTIONS {
+        let sim = open_loop_from(input, &JointPhysics { limit_restitution: r, ..physics.clone() }, start, state);
+        let (sse, _) = rmse_mask(y, &sim, |i| mask[i]);
+        if best.is_none_or(|(b, _)| sse < b * (1.0 - 1e-9)) {
+            best = Some((sse, r));
+        }
+    }
+    best.map_or(0.0, |(_, r)| r)
+}
+
+/// E-folds an open-loop replay of a mechanism that gravity drives away from where it is (a lid
+/// held open by a constant effort) may diverge over before it measures the divergence rather
+/// than the model.
+const HELD_OUT_E_FOLDS: f64 = 2.0;
+
+/// Samples after a held-out piece's start on which its starting state is measured, seconds; they
+/// are not scored.
+const START_STATE_HORIZON_S: f64 = 0.15;
+
+/// Shortest held-out piece, seconds: three times the stretch that measures its start, so that
+/// most of a piece is prediction and an effect has time to show.
+const MIN_HELD_OUT_PIECE_S: f64 = 3.0 * START_STATE_HORIZON_S;
+
+/// For a joint whose recorded motion gravity makes unstable (linearised: inertia · δa =
+/// gravity'(q) · δq with gravity' > 0, so errors grow as e^{λt}, λ = √(gravity'/inertia)), the
+/// length of the held-out pieces, [`HELD_OUT_E_FOLDS`] / λ (at least [`MIN_HELD_OUT_PIECE_S`]);
+/// `None` where the typical (median) sample is stable or neutral, or the held-out part is no
+/// longer than a piece: there one open-loop replay from the start of the training part measures
+/// the model, and a small damping shows only over seconds.
+fn unstable_horizon_s(input: &SimInput<'_>, y: &[f64], train: &[bool]) -> Option<f64> {
+    let mut rates: Vec<f64> = (0..y.len())
+        .filter(|&i| train[i] && y[i].is_finite())
+        .map(|i| {
+            let (t, q) = (&input.terms[i], y[i]);
+            let slope = t.gravity_sin * q.cos() - t.gravity_cos * q.sin();
+            (slope / t.inertia.max(1e-12)).max(0.0).sqrt()
+        })
+        .collect();
+    if rates.is_empty() {
+        return None;
+    }
+    rates.sort_by(f64::total_cmp);
+    let rate = rates[rates.len() / 2];
+    let horizon_s = (HELD_OUT_E_FOLDS / rate).max(MIN_HELD_OUT_PIECE_S);
+    let held_s = input.time_s.last()? - input.time_s.iter().zip(train).find(|(_, t)| !**t).map(|(s, _)| *s)?;
+    (horizon_s < held_s).then_some(horizon_s)
+}
+
+/// Each piece of `pieces` replayed open loop from the state measured on its first
+/// [`START_STATE_HORIZON_S`]; those samples are left NaN (not scored).
+fn replay_pieces(pieces: &fit::Problem<'_>, physics: &JointPhysics) -> Vec<f64> {
+    let states = fit::refine_states_within(pieces, physics, &pieces.data_states(), START_STATE_HORIZON_S);
+    let mut out = vec![f64::NAN; pieces.y.len()];
+    for (span, state) in pieces.segments.iter().zip(states) {
+        let piece = &mut out[span.start..=span.end];
+        sim::simulate(&pieces.input, physics, span.start, span.end, state.0, state.1, piece);
+        let t0 = pieces.input.time_s[span.start];
+        for (v, t) in piece.iter_mut().zip(&pieces.input.time_s[span.start..=span.end]) {
+            if t - t0 <= START_STATE_HORIZON_S {
+                *v = f64::NAN;
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gap::model::{DofKind, JointTerms};
+
+    /// The held-out piece length for a joint held at `q_rad` for 10 s (the first 7 s training),
+    /// with gravity effort `gravity_cos`·cos q + `gravity_sin`·sin q and inertia 0.01.
+    fn check(gravity_cos: f64, gravity_sin: f64, q_rad: f64, expected_s: Option<f64>) {
+        let n = 1001;
+        let time_s: Vec<f64> = (0..n).map(|i| 0.01 * i as f64).collect();
+        let effort = vec![0.0; n];
+        let terms = vec![JointTerms { inertia: 0.01, gravity_cos, gravity_sin, ..JointTerms::default() }; n];
+        let y = vec![q_rad; n];
+        let train: Vec<bool> = time_s.iter().map(|&t| t < 7.0).collect();
+        let got = unstable_horizon_s(&SimInput { time_s: &time_s, effort: &effort, terms: &terms }, &y, &train);
+        match (got, expected_s) {
+            (Some(g), Some(e)) => assert!((g - e).abs() < 1e-9, "{g} vs {e}"),
+            _ => assert_eq!(got, expected_s),
+        }
+    }
+
+    #[test]
+    fn held_out_replays_of_a_lid_held_open_run_in_pieces_of_two_e_folds() {
+        // A lid of 1 N·m weight, inertia 0.01, held open at 0.6 rad: λ = √(sin 0.6 / 0.01) ≈ 7.5/s,
+        // two e-folds 0.27 s, so the shortest piece.
+        check(-1.0, 0.0, 0.6, Some(MIN_HELD_OUT_PIECE_S));
+        // A heavier lid of 100 N·m on the same inertia: λ ≈ 75/s; still the shortest piece.
+        check(-100.0, 0.0, 0.6, Some(MIN_HELD_OUT_PIECE_S));
+        // A light one diverges over 2.4 s: pieces of two e-folds.
+        check(-0.01, 0.0, 0.6, Some(HELD_OUT_E_FOLDS / (0.01 * 0.6f64.sin() / 0.01).sqrt()));
+        // Lighter still: a piece would be longer than the held-out part, so one replay.
+        check(-1e-4, 0.0, 0.6, None);
+        // Hanging pendulums and drawers are stable or neutral.
+        check(0.0, -1.0, 0.1, None);
+        check(0.0, 0.0, 0.3, None);
+    }
+
+    fn drawer(lower: f64, upper: f64) -> JointPhysics {
+        JointPhysics { closed_end: lower, lower: Some(lower), upper: Some(upper), ..JointPhysics::free(DofKind::Prismatic) }
+    }
+
+    #[test]
+    fn a_drawer_bouncing_off_its_modelled_limit_replays_with_the_bounce() {
+        // A 2 kg drawer pushed shut at 0.3 m/s into its modelled lower limit, which bounces it
+        // back with restitution 0.2 (an engine's soft limit); pulled once more later.
+        let n = 600;
+        let time_s: Vec<f64> = (0..n).map(|i| 0.005 * i as f64).collect();
+        let effort: Vec<f64> = (0..n).map(|i| if (400..420).contains(&i) { 5.0 } else { 0.0 }).collect();
+        let terms = vec![JointTerms { inertia: 2.0, ..JointTerms::default() }; n];
+        let input = SimInput { time_s: &time_s, effort: &effort, terms: &terms };
+        let truth = JointPhysics { limit_restitution: 0.2, ..drawer(0.0, 0.5) };
+        let y = open_loop_from(&input, &truth, 0, (0.1, -0.3));
+        let all = vec![true; n];
+        let (_, r) = replay_with_bounce(&input, &y, &all, 1e-3, &drawer(0.0, 0.5), 0, (0.1, -0.3));
+        assert!((r - 0.2).abs() < 1e-12, "{r}");
+        // Before it reaches the limit, nothing tells how the limit bounces: it stays dead.
+        let early: Vec<bool> = (0..n).map(|i| i < 40).collect();
+        assert!(limit_restitution(&input, &y, &early, 1e-3, &drawer(0.0, 0.5), 0, (0.1, -0.3)).abs() < 1e-12);
+        // A model whose limit the recording never reaches (here at −0.2 m) gets no bounce, even if
+        // a replay drifts into it.
+        assert!(limit_restitution(&input, &y, &all, 1e-3, &drawer(-0.2, 0.5), 0, (0.1, -0.3)).abs() < 1e-12);
+    }
+}
