@@ -319,13 +319,13 @@ fn analyze_joint(
         EffectKind::FITTABLE.into_iter().filter(|k| k.applies_to(joint.kind) && (*k != EffectKind::GravityTilt || vertical)).collect();
     let select_here = || {
         let s = select::select(&problem, &derivs, &candidates, cfg.max_terms, cfg.min_mismatch_samples);
-        (s.chosen, s.confidence)
+        (s.chosen, s.confidence, s.rejected)
     };
     let mut fell_back = false;
-    let (chosen, confidence) = match given {
+    let (chosen, confidence, mut rejected_here) = match given {
         // A joint whose replay is already within its noise floor gets no effects, whatever the
         // effort space saw (a joint at rest tells nothing about its physics).
-        _ if spans.is_empty() => (nominal.clone(), Vec::new()),
+        _ if spans.is_empty() => (nominal.clone(), Vec::new(), Vec::new()),
         // Structure from effort space; parameters refined by output error (DIDIM). When the
         // motion is still far from explained (effort space could not see an effect that acts
         // mostly near a stop, say), the terms are chosen here instead.
@@ -358,7 +358,7 @@ fn analyze_joint(
             let alternative =
                 (effort_unexplained && !spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma).then(select_here);
             // The alternative must prove itself on data it was not fitted to.
-            let better = alternative.as_ref().is_some_and(|(alt, _)| {
+            let better = alternative.as_ref().is_some_and(|(alt, _, _)| {
                 let mine = held_out::held_out(rec, input, y, sigma, joint, &refined.effects, t_split).rmse_after;
                 let theirs = held_out::held_out(rec, input, y, sigma, joint, &alt.effects, t_split).rmse_after;
                 theirs * FALLBACK_HELD_OUT_GAIN < mine
@@ -372,7 +372,7 @@ fn analyze_joint(
                     .iter()
                     .map(|e| g.effects.iter().position(|x| x.kind == e.kind).and_then(|k| g.confidence.get(k).copied()).unwrap_or(0.5))
                     .collect();
-                (refined, confidence)
+                (refined, confidence, Vec::new())
             }
         }
         None => select_here(),
@@ -380,7 +380,6 @@ fn analyze_joint(
     // Terms chosen in position space must hold on data they were not fitted to: a structure
     // that makes the held-out replay worse is not reported (it fits how stops or friction are
     // simulated, not missing physics).
-    let mut rejected_here = Vec::new();
     // Whichever way the terms were chosen, each must be something: not a level its own σ cannot
     // tell from none, and not an effort too small to matter next to the joint's own.
     let (chosen, confidence) = {
@@ -495,6 +494,10 @@ fn analyze_joint(
             if fell_back {
                 a.mode = "position".into();
                 a.why.push_str("; the refined terms left the motion unexplained, so they were chosen in position space");
+                a.rejected.clone_from(&rejected_here);
+            } else {
+                // What the output-error refinement dropped, after what effort space turned down.
+                a.rejected.extend(rejected_here.iter().cloned());
             }
             a
         },

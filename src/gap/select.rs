@@ -29,6 +29,8 @@ pub struct Selection {
     pub chosen: FitResult,
     /// Confidence of each chosen effect (same order as `chosen.effects`).
     pub confidence: Vec<f64>,
+    /// Every candidate kind not chosen, and why (`kind: reason`), as the report lists them.
+    pub rejected: Vec<String>,
 }
 
 fn effect(kind: EffectKind, params: Vec<f64>, blocks_upward: bool) -> Effect {
@@ -138,8 +140,9 @@ fn equation_error(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKin
     out
 }
 
-/// Fits one structure (set of kinds), trying the few starting points the switch-like kinds need.
-fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind], warm: &[Effect]) -> FitResult {
+/// Fits one structure (set of kinds), trying the few starting points the switch-like kinds need;
+/// `within`: the terms of the structure chosen so far, from which [`nested_start`] starts.
+fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind], warm: &[Effect], within: &[Effect]) -> FitResult {
     let warm_of = |k: EffectKind| warm.iter().find(|e| e.kind == k).cloned();
     let known: Vec<Effect> =
         kinds.iter().filter(|k| matches!(k, EffectKind::EndStop | EffectKind::SoftClose)).filter_map(|&k| warm_of(k)).collect();
@@ -163,6 +166,7 @@ fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind
     if warmed {
         starts.push(joint_start);
     }
+    starts.extend(nested_start(&base, within));
     // Equilibrium-like parameters: also start from the middle of the observed range.
     for kind in [EffectKind::Spring, EffectKind::GravityTilt] {
         if kinds.contains(&kind) && warm_of(kind).is_none() {
@@ -218,6 +222,32 @@ fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind
         .map(|s| fit(problem, s, None, None, MAX_ITER))
         .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .unwrap_or_else(|| fit(problem, &base, None, None, MAX_ITER))
+}
+
+/// The start that nests a fitted structure in a larger one: the warm terms as fitted, each new
+/// linear term at the level that means none (no damping, friction, spring or tilt; the modelled
+/// weight). From it the larger structure cannot end worse than the one it holds; from a start
+/// far from it, it can stick (friction that holds a lid shut loses every gradient). `None` when
+/// no new term has such a level.
+fn nested_start(base: &[Effect], within: &[Effect]) -> Option<Vec<Effect>> {
+    let mut nested = base.to_vec();
+    let mut any = false;
+    for e in &mut nested {
+        if let Some(fitted) = within.iter().find(|w| w.kind == e.kind) {
+            e.clone_from(fitted);
+            continue;
+        }
+        let none = match e.kind {
+            EffectKind::ViscousDamping | EffectKind::CoulombFriction | EffectKind::Spring | EffectKind::GravityTilt => 0.0,
+            EffectKind::MassScale => 1.0,
+            _ => return None,
+        };
+        if let Some(level) = e.params.first_mut() {
+            *level = none;
+            any = true;
+        }
+    }
+    (any && !within.is_empty()).then_some(nested)
 }
 
 fn key(kinds: &[EffectKind]) -> Vec<EffectKind> {
@@ -297,7 +327,8 @@ pub fn select(problem: &Problem<'_>, derivs: &[[f64; 3]], candidates: &[EffectKi
         };
         let jobs: Vec<(Vec<EffectKind>, Vec<Effect>)> =
             trials.iter().filter(|k| !cache.contains_key(*k)).map(|k| (k.clone(), warm_for(k))).collect();
-        let fits: Vec<FitResult> = jobs.par_iter().map(|(kinds, warm)| fit_structure(problem, derivs, kinds, warm)).collect();
+        let fits: Vec<FitResult> =
+            jobs.par_iter().map(|(kinds, warm)| fit_structure(problem, derivs, kinds, warm, &current.effects)).collect();
         for ((kinds, _), f) in jobs.into_iter().zip(fits) {
             cache.insert(kinds, f);
         }
@@ -345,7 +376,8 @@ pub fn select(problem: &Problem<'_>, derivs: &[[f64; 3]], candidates: &[EffectKi
     }
     needed.retain(|k| !cache.contains_key(k));
     needed.dedup();
-    let extra: Vec<FitResult> = needed.par_iter().map(|kinds| fit_structure(problem, derivs, kinds, &current.effects)).collect();
+    let extra: Vec<FitResult> =
+        needed.par_iter().map(|kinds| fit_structure(problem, derivs, kinds, &current.effects, &current.effects)).collect();
     cache.extend(needed.into_iter().zip(extra));
     let bic = current.bic();
     let confidence = current
@@ -362,5 +394,77 @@ pub fn select(problem: &Problem<'_>, derivs: &[[f64; 3]], candidates: &[EffectKi
             1.0 / (1.0 + odds)
         })
         .collect();
-    Selection { nominal, chosen: current, confidence }
+    let rejected = rejections(candidates, &chosen_kinds, &current, &nominal, &cache);
+    Selection { nominal, chosen: current, confidence, rejected }
+}
+
+/// Why each candidate kind not in `chosen` was not reported, from the fits selection made: beside
+/// the chosen terms where that structure was fitted, else alone against the model as written.
+fn rejections(
+    candidates: &[EffectKind],
+    chosen: &[EffectKind],
+    current: &FitResult,
+    nominal: &FitResult,
+    cache: &BTreeMap<Vec<EffectKind>, FitResult>,
+) -> Vec<String> {
+    let verdict = |f: &FitResult, against: &FitResult| {
+        format!(
+            "BIC {:+.1} (a term must lower it by {BIC_MARGIN:.0}) and {:.1} % of the misfit cut (it must cut {:.0} %)",
+            f.bic() - against.bic(),
+            100.0 * (1.0 - f.cost / against.cost.max(f64::MIN_POSITIVE)),
+            100.0 * MIN_GAIN
+        )
+    };
+    let names: Vec<&str> = chosen.iter().map(|k| k.name()).collect();
+    candidates
+        .iter()
+        .filter(|k| !chosen.contains(k))
+        .filter_map(|&k| {
+            let why = if let Some(f) = cache.get(&key(&[chosen, &[k]].concat())).filter(|_| !chosen.is_empty()) {
+                format!("fitted beside {}: {} — not reported", names.join(" + "), verdict(f, current))
+            } else {
+                let f = cache.get(&vec![k])?;
+                if chosen.is_empty() {
+                    format!("fitted alone: {} — not reported", verdict(f, nominal))
+                } else {
+                    format!(
+                        "alone it explains less than {} (BIC {:+.1} against {:+.1}, both from the model as written); not tried beside \
+                         them, which left no misfit beyond the noise",
+                        names.join(" + "),
+                        f.bic() - nominal.bic(),
+                        current.bic() - nominal.bic()
+                    )
+                }
+            };
+            Some(format!("{}: {why}", k.name()))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn e(kind: EffectKind, level: f64) -> Effect {
+        Effect { kind, params: vec![level], blocks_upward: false }
+    }
+
+    fn check(base: &[Effect], within: &[Effect], expected: Option<&[(EffectKind, f64)]>) {
+        let got = nested_start(base, within).map(|s| s.iter().map(|x| (x.kind, x.params[0])).collect::<Vec<_>>());
+        assert_eq!(got.as_deref(), expected);
+    }
+
+    #[test]
+    fn a_lid_that_got_heavier_first_gets_its_friction_fitted_from_none() {
+        // Regression: a heavier MuJoCo lid with a dry hinge; the pair fit started from the
+        // friction's own single fit, held the lid shut, and ended 200× worse than the weight
+        // alone, so the friction was never named. The nested start keeps the weight as fitted.
+        use EffectKind::{CoulombFriction, EndStop, MassScale, ViscousDamping};
+        check(&[e(CoulombFriction, 0.8), e(MassScale, 1.4)], &[e(MassScale, 1.5)], Some(&[(CoulombFriction, 0.0), (MassScale, 1.5)]));
+        check(&[e(ViscousDamping, 0.3), e(MassScale, 1.4)], &[e(ViscousDamping, 0.2)], Some(&[(ViscousDamping, 0.2), (MassScale, 1.0)]));
+        // Nothing fitted yet, nothing new, or a new term with no level that means none: no start.
+        check(&[e(CoulombFriction, 0.8)], &[], None);
+        check(&[e(MassScale, 1.4)], &[e(MassScale, 1.5)], None);
+        check(&[e(EndStop, 0.3), e(MassScale, 1.4)], &[e(MassScale, 1.5)], None);
+    }
 }
