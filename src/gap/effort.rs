@@ -848,6 +848,15 @@ impl EffortProblem<'_> {
     }
 }
 
+/// The jackknife standard deviation of an estimate from its leave-one-fold-out values (`folds`
+/// of them; non-finite ones skipped).
+fn jackknife_sd(values: &[f64], folds: usize) -> f64 {
+    let vals: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    let mean = vals.iter().sum::<f64>() / vals.len().max(1) as f64;
+    let k = folds as f64;
+    ((k - 1.0) / k * vals.iter().map(|x| (x - mean).powi(2)).sum::<f64>()).sqrt()
+}
+
 /// Fewest held-out samples for a fold to count in the fold share.
 const MIN_FOLD_SAMPLES: usize = 10;
 
@@ -948,9 +957,52 @@ impl EffortProblem<'_> {
                 break;
             }
         }
+        self.settle_refinements(&mut chosen);
         self.prefer_inertia_alone(&mut chosen);
         chosen.sort_unstable();
         chosen
+    }
+
+    /// How far refinement c departs from its base law under `theta`: Stribeck's break-away over
+    /// its sliding level, an asymmetric Coulomb law's reverse level over its forward one.
+    fn refinement_excess(&self, c: usize, theta: &BTreeMap<usize, f64>) -> f64 {
+        let p = self.effect_of(c, theta).params;
+        match self.candidates[c].kind {
+            EffectKind::StribeckFriction => p[1] - p[0],
+            _ => p.get(2).map_or(f64::NAN, |r| r - p[0]),
+        }
+    }
+
+    /// A refinement whose departure from its base law lies within two jackknife σ of none is
+    /// its base law (the rule position space applies to every level): an engine's regularised
+    /// friction on a loaded shoulder gave a "break-away" 1.8× the sliding level, 1.7σ from none.
+    /// It is replaced by the base-law variant on its joint that fits best.
+    fn settle_refinements(&self, chosen: &mut Vec<usize>) {
+        let folds = self.rules.folds.max(2);
+        loop {
+            let fitted = self.evaluate(chosen);
+            let doubtful = chosen.iter().copied().find(|&c| {
+                if !self.candidates[c].is_refinement() {
+                    return false;
+                }
+                let jack: Vec<f64> = fitted.theta_without.iter().map(|t| self.refinement_excess(c, t)).collect();
+                self.refinement_excess(c, &fitted.theta).abs() < 2.0 * jackknife_sd(&jack, folds)
+            });
+            let Some(c) = doubtful else { return };
+            let cand = &self.candidates[c];
+            let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
+            let sse_with = |b: usize| {
+                let e = self.evaluate(&self.with(&rest, b));
+                self.rows_of(b).iter().map(|&r| e.row_sse(r)).sum::<f64>()
+            };
+            let base = (0..self.candidates.len())
+                .filter(|&b| {
+                    let x = &self.candidates[b];
+                    x.row == cand.row && x.family == cand.family && !x.is_refinement()
+                })
+                .min_by(|&a, &b| sse_with(a).total_cmp(&sse_with(b)));
+            *chosen = base.map_or_else(|| rest.clone(), |b| self.with(&rest, b));
+        }
     }
 
     /// The spec's rule: a heavier part (`mass_scale`) is inertia and weight together; inertia
@@ -1090,13 +1142,8 @@ impl EffortProblem<'_> {
             let v = self.verdict(&without, &fitted, &self.rows_of(c), c, None);
             let effect = self.effect_of(c, &fitted.theta);
             let jack: Vec<Effect> = fitted.theta_without.iter().map(|t| self.effect_of(c, t)).collect();
-            let std: Vec<f64> = (0..effect.params.len())
-                .map(|p| {
-                    let vals: Vec<f64> = jack.iter().map(|e| e.params[p]).filter(|x| x.is_finite()).collect();
-                    let mean = vals.iter().sum::<f64>() / vals.len().max(1) as f64;
-                    ((k as f64 - 1.0) / k as f64 * vals.iter().map(|x| (x - mean).powi(2)).sum::<f64>()).sqrt()
-                })
-                .collect();
+            let std: Vec<f64> =
+                (0..effect.params.len()).map(|p| jackknife_sd(&jack.iter().map(|e| e.params[p]).collect::<Vec<f64>>(), k)).collect();
             let f = &mut findings[self.candidates[c].row];
             f.confidence.push((v.fold_share * (1.0 - (-v.gain / 0.03).exp())).clamp(0.0, 1.0));
             f.effect_rms.push(self.term_rms(c, &fitted.theta));
@@ -1178,5 +1225,24 @@ impl EffortProblem<'_> {
             };
             findings[row].rejected.push(format!("{}: {why}", kind.name()));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(values: &[f64], folds: usize, expected: f64) {
+        let got = jackknife_sd(values, folds);
+        assert!((got - expected).abs() < 1e-12, "{values:?}: {got} vs {expected}");
+    }
+
+    #[test]
+    fn jackknife_sd_spreads_the_fold_estimates_and_skips_nan() {
+        check(&[1.0, 1.0, 1.0], 3, 0.0);
+        // √((k − 1)/k · Σ(x − x̄)²) = √(1/2 · 2) = 1.
+        check(&[0.0, 2.0], 2, 1.0);
+        check(&[0.0, f64::NAN, 2.0], 2, 1.0);
+        check(&[], 4, 0.0);
     }
 }
