@@ -1000,8 +1000,12 @@ impl EffortProblem<'_> {
                     let x = &self.candidates[b];
                     x.row == cand.row && x.family == cand.family && !x.is_refinement()
                 })
-                .min_by(|&a, &b| sse_with(a).total_cmp(&sse_with(b)));
-            *chosen = base.map_or_else(|| rest.clone(), |b| self.with(&rest, b));
+                .map(|b| (sse_with(b), b))
+                .min_by(|x, y| x.0.total_cmp(&y.0));
+            *chosen = match base {
+                Some((_, b)) => self.with(&rest, b),
+                None => rest,
+            };
         }
     }
 

@@ -40,35 +40,17 @@ pub(super) fn held_out(
     let chosen_t =
         if effects.is_empty() { nominal_t.clone() } else { fit::fit(&train_problem, effects, Some(&free_mask(effects)), None, 25) };
     let s0 = train_problem.segments[0].start;
-    let bouncing = |physics: &JointPhysics, state: (f64, f64)| {
-        let r = limit_restitution(&input, y, &train, sigma, physics, s0, state);
-        JointPhysics { limit_restitution: r, ..physics.clone() }
-    };
-    let nominal = bouncing(&JointPhysics::nominal(joint), nominal_t.states[0]);
-    let fitted = bouncing(&JointPhysics::with_effects(joint, &chosen_t.effects), chosen_t.states[0]);
+    let (b, nominal) = replay_with_bounce(&input, y, &train, sigma, &JointPhysics::nominal(joint), s0, nominal_t.states[0]);
+    let (a, fitted) =
+        replay_with_bounce(&input, y, &train, sigma, &JointPhysics::with_effects(joint, &chosen_t.effects), s0, chosen_t.states[0]);
     let (b, a) = if let Some(horizon_s) = unstable_horizon_s(&input, y, &train) {
         let held: Vec<bool> = train.iter().map(|t| !t).collect();
         let pieces = fit::Problem::with_segments_of(input, y, &held, sigma, joint, horizon_s);
         (replay_pieces(&pieces, &nominal), replay_pieces(&pieces, &fitted))
     } else {
-        (open_loop_from(&input, &nominal, s0, nominal_t.states[0]), open_loop_from(&input, &fitted, s0, chosen_t.states[0]))
+        (b, a)
     };
     rmse_pair(y, &b, &a, |i| rec.time_s[i] >= t_split).0
-}
-
-/// `physics` replayed open loop from `start` with the model's limits bouncing as the samples
-/// `mask` selects show ([`limit_restitution`]); the replay and the restitution it used.
-pub(super) fn replay_with_bounce(
-    input: &SimInput<'_>,
-    y: &[f64],
-    mask: &[bool],
-    sigma: f64,
-    physics: &JointPhysics,
-    start: usize,
-    state: (f64, f64),
-) -> (Vec<f64>, f64) {
-    let r = limit_restitution(input, y, mask, sigma, physics, start, state);
-    (open_loop_from(input, &JointPhysics { limit_restitution: r, ..physics.clone() }, start, state), r)
 }
 
 /// What the report says about a restitution the replays used, if any.
@@ -81,17 +63,18 @@ pub(super) fn bounce_note(restitution: f64) -> Option<String> {
     })
 }
 
-/// Restitutions of the model's own limits tried ([`limit_restitution`]).
+/// Restitutions of the model's own limits tried ([`replay_with_bounce`]).
 const LIMIT_RESTITUTIONS: [f64; 6] = [0.0, 0.05, 0.1, 0.15, 0.2, 0.3];
 
 /// Noise σs within which a measured position counts as at a limit.
 const AT_LIMIT_SIGMAS: f64 = 3.0;
 
-/// The restitution of the model's limits (from [`LIMIT_RESTITUTIONS`], the first on ties) that
-/// replays the samples `mask` selects best, open loop from `start`; 0 where none of those samples
-/// reaches a limit (nothing says how it bounces: a replay that drifts into a limit the
-/// recording never touches must not get a bounce fitted to its drift).
-fn limit_restitution(
+/// `physics` replayed open loop from `start`, with the restitution of the model's limits (from
+/// [`LIMIT_RESTITUTIONS`], the first on ties) that replays the samples `mask` selects best; the
+/// replay and the physics it used. No bounce where none of those samples reaches a limit (nothing
+/// says how it bounces: a replay that drifts into a limit the recording never touches must not
+/// get a bounce fitted to its drift).
+pub(super) fn replay_with_bounce(
     input: &SimInput<'_>,
     y: &[f64],
     mask: &[bool],
@@ -99,25 +82,24 @@ fn limit_restitution(
     physics: &JointPhysics,
     start: usize,
     state: (f64, f64),
-) -> f64 {
+) -> (Vec<f64>, JointPhysics) {
     let band = AT_LIMIT_SIGMAS * sigma;
     let reaches = |i: usize| {
         mask[i]
             && y[i].is_finite()
             && (physics.lower.is_some_and(|lo| y[i] <= lo + band) || physics.upper.is_some_and(|hi| y[i] >= hi - band))
     };
-    if !(0..y.len()).any(reaches) {
-        return 0.0;
-    }
-    let mut best: Option<(f64, f64)> = None;
-    for r in LIMIT_RESTITUTIONS {
-        let sim = open_loop_from(input, &JointPhysics { limit_restitution: r, ..physics.clone() }, start, state);
+    let tried: &[f64] = if (0..y.len()).any(reaches) { &LIMIT_RESTITUTIONS } else { &[0.0] };
+    let mut best: Option<(f64, Vec<f64>, JointPhysics)> = None;
+    for &r in tried {
+        let p = JointPhysics { limit_restitution: r, ..physics.clone() };
+        let sim = open_loop_from(input, &p, start, state);
         let (sse, _) = rmse_mask(y, &sim, |i| mask[i]);
-        if best.is_none_or(|(b, _)| sse < b * (1.0 - 1e-9)) {
-            best = Some((sse, r));
+        if best.as_ref().is_none_or(|(b, _, _)| sse < b * (1.0 - 1e-9)) {
+            best = Some((sse, sim, p));
         }
     }
-    best.map_or(0.0, |(_, r)| r)
+    best.map_or_else(|| (open_loop_from(input, physics, start, state), physics.clone()), |(_, sim, p)| (sim, p))
 }
 
 /// E-folds an open-loop replay of a mechanism that gravity drives away from where it is (a lid
@@ -229,13 +211,15 @@ mod tests {
         let truth = JointPhysics { limit_restitution: 0.2, ..drawer(0.0, 0.5) };
         let y = open_loop_from(&input, &truth, 0, (0.1, -0.3));
         let all = vec![true; n];
-        let (_, r) = replay_with_bounce(&input, &y, &all, 1e-3, &drawer(0.0, 0.5), 0, (0.1, -0.3));
+        let bounce =
+            |mask: &[bool], model: JointPhysics| replay_with_bounce(&input, &y, mask, 1e-3, &model, 0, (0.1, -0.3)).1.limit_restitution;
+        let r = bounce(&all, drawer(0.0, 0.5));
         assert!((r - 0.2).abs() < 1e-12, "{r}");
         // Before it reaches the limit, nothing tells how the limit bounces: it stays dead.
         let early: Vec<bool> = (0..n).map(|i| i < 40).collect();
-        assert!(limit_restitution(&input, &y, &early, 1e-3, &drawer(0.0, 0.5), 0, (0.1, -0.3)).abs() < 1e-12);
+        assert!(bounce(&early, drawer(0.0, 0.5)).abs() < 1e-12);
         // A model whose limit the recording never reaches (here at −0.2 m) gets no bounce, even if
         // a replay drifts into it.
-        assert!(limit_restitution(&input, &y, &all, 1e-3, &drawer(-0.2, 0.5), 0, (0.1, -0.3)).abs() < 1e-12);
+        assert!(bounce(&all, drawer(-0.2, 0.5)).abs() < 1e-12);
     }
 }

@@ -377,9 +377,6 @@ fn analyze_joint(
         }
         None => select_here(),
     };
-    // Terms chosen in position space must hold on data they were not fitted to: a structure
-    // that makes the held-out replay worse is not reported (it fits how stops or friction are
-    // simulated, not missing physics).
     // Whichever way the terms were chosen, each must be something: not a level its own σ cannot
     // tell from none, and not an effort too small to matter next to the joint's own.
     let (chosen, confidence) = {
@@ -413,6 +410,9 @@ fn analyze_joint(
             (refit, conf)
         }
     };
+    // Terms chosen in position space must hold on data they were not fitted to: a structure
+    // that makes the held-out replay worse is not reported (it fits how stops or friction are
+    // simulated, not missing physics).
     let mut held = held_out::held_out(rec, input, y, sigma, joint, &chosen.effects, t_split);
     let (chosen, confidence) = if given.is_none() && !chosen.effects.is_empty() && held.rmse_after >= held.rmse_before {
         let kinds: Vec<&str> = chosen.effects.iter().map(|e| e.kind.name()).collect();
@@ -484,7 +484,7 @@ fn analyze_joint(
         held_out::replay_with_bounce(&input, y, &everywhere, sigma, physics, start, state.unwrap_or((y[start], 0.0)))
     };
     let (before_sim, _) = replay(&nominal_physics, nominal.states.first().copied());
-    let (after_sim, bounce) = replay(&fitted_physics, chosen.states.first().copied());
+    let (after_sim, bouncing) = replay(&fitted_physics, chosen.states.first().copied());
     let (all_pair, sq) = rmse_pair(y, &before_sim, &after_sim, |_| true);
     let series = JointSeries::new(&joint.name, unit, &rec.time_s, y, before_sim, after_sim, sigma);
     let mut analysis = given.map_or_else(
@@ -502,7 +502,7 @@ fn analyze_joint(
             a
         },
     );
-    if let Some(note) = held_out::bounce_note(bounce) {
+    if let Some(note) = held_out::bounce_note(bouncing.limit_restitution) {
         analysis.why.push_str(if analysis.why.is_empty() { "" } else { "; " });
         analysis.why.push_str(&note);
     }

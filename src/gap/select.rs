@@ -224,7 +224,7 @@ fn fit_structure(problem: &Problem<'_>, derivs: &[[f64; 3]], kinds: &[EffectKind
         .unwrap_or_else(|| fit(problem, &base, None, None, MAX_ITER))
 }
 
-/// The start that nests a fitted structure in a larger one: the warm terms as fitted, each new
+/// The start that nests a fitted structure in a larger one: the terms of `within` as fitted, each new
 /// linear term at the level that means none (no damping, friction, spring or tilt; the modelled
 /// weight). From it the larger structure cannot end worse than the one it holds; from a start
 /// far from it, it can stick (friction that holds a lid shut loses every gradient). `None` when
