@@ -162,9 +162,13 @@ pub struct Totals {
     pub map: Option<f32>,
     pub movable_joints: usize,
     pub movable_correct: usize,
-    /// Movable truth joints whose parent the model got right.
+    /// Movable truth joints whose parent the model got right: the truth parent's rigid body
+    /// ([`crate::eval::kinematics::JointRow::parent_correct`]).
     #[serde(default)]
     pub movable_parent_correct: usize,
+    /// … of which the model names the truth's own parent part.
+    #[serde(default)]
+    pub movable_parent_same_part: usize,
     /// Movable truth joints the model is confident in (≥ [`CONFIDENT`]) …
     #[serde(default)]
     pub confident_joints: usize,
@@ -189,6 +193,7 @@ impl Totals {
         let movable_joints = joints.clone().count();
         let movable_correct = joints.clone().filter(|j| j.type_correct).count();
         let movable_parent_correct = joints.clone().filter(|j| j.parent_correct).count();
+        let movable_parent_same_part = joints.clone().filter(|j| j.parent_same_part).count();
         let confident = joints.clone().filter(|j| j.confidence.is_some_and(|c| c >= CONFIDENT));
         let confident_joints = confident.clone().count();
         let confident_right = confident.filter(|j| j.type_correct && j.parent_correct).count();
@@ -202,6 +207,7 @@ impl Totals {
             movable_joints,
             movable_correct,
             movable_parent_correct,
+            movable_parent_same_part,
             confident_joints,
             confident_right,
             movable_type_accuracy: (movable_joints > 0).then(|| movable_correct as f32 / movable_joints as f32),
@@ -259,7 +265,7 @@ fn num(v: Option<f32>, digits: usize) -> String {
 
 fn row_cells(t: &Totals) -> String {
     format!(
-        "{} vs {} | {} vs {} | {} | {}/{} | {}/{} | {}/{} | {} | {} | {}",
+        "{} vs {} | {} vs {} | {} | {}/{} | {}/{} ({} same part) | {}/{} | {} | {} | {}",
         num(t.part_chamfer, 3),
         num(t.object_chamfer, 3),
         num(t.part_iou, 3),
@@ -269,6 +275,7 @@ fn row_cells(t: &Totals) -> String {
         t.movable_joints,
         t.movable_parent_correct,
         t.movable_joints,
+        t.movable_parent_same_part,
         t.confident_right,
         t.confident_joints,
         num(t.median_axis_error_deg, 1),
@@ -277,7 +284,7 @@ fn row_cells(t: &Totals) -> String {
     )
 }
 
-const HEADER: &str = "| {} | setting | Chamfer ↓ part vs object | IoU ↑ part vs object | edge mAP | movable types | movable parents | right at confidence ≥ 0.9 | axis err ° (median) | hinge cm (median) | prismatic origin cm (median) |\n| --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+const HEADER: &str = "| {} | setting | Chamfer ↓ part vs object | IoU ↑ part vs object | edge mAP | movable types | movable parents (rigid body) | right at confidence ≥ 0.9 | axis err ° (median) | hinge cm (median) | prismatic origin cm (median) |\n| --- | --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
 
 impl BenchReport {
     /// The tables as markdown: per object, per category, all.

@@ -71,6 +71,8 @@ pub(crate) fn edge_ap(model: &SceneModel, truth: &TruthObject, model_parts: &BTr
 }
 
 /// How one truth joint was reconstructed.
+// A flat record of independent yes/no findings, read by people and scripts as JSON fields.
+#[allow(clippy::struct_excessive_bools)]
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct JointRow {
     /// The truth joint's child part.
@@ -82,9 +84,15 @@ pub struct JointRow {
     /// The child part is not in the model at all.
     pub part_missing: bool,
     pub type_correct: bool,
-    /// The model joins the same two parts (either way round).
+    /// The model joins the child to its truth parent's rigid body (either way round): to the
+    /// truth parent itself or to a part the truth welds to it with fixed joints. A knob the truth
+    /// hangs off an oven's body and the model off the hood welded to that body moves alike.
     #[serde(default)]
     pub parent_correct: bool,
+    /// The model joins the same two parts as the truth (either way round): the strict reading
+    /// of `parent_correct`.
+    #[serde(default)]
+    pub parent_same_part: bool,
     /// The model's confidence in its joint ([`crate::kinematics::JointEvidence`]), when it has one.
     #[serde(default)]
     pub confidence: Option<f32>,
@@ -143,7 +151,12 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
                     prismatic_origin_distance_m = prismatic_origin_distance(p.origin_world, t.axis_world, centre);
                 }
             }
-            let parent_correct = same_pair.is_some() && !part_missing;
+            let body = |id: PartId| rigid_body(truth, id);
+            let joined_to_parent_body = model.joints.iter().any(|j| {
+                (j.child == t.child && body(j.parent) == body(t.parent)) || (j.parent == t.child && body(j.child) == body(t.parent))
+            });
+            let parent_correct = joined_to_parent_body && !part_missing;
+            let parent_same_part = same_pair.is_some() && !part_missing;
             let confidence = predicted.and_then(|p| model.evidence.iter().find(|e| e.child == p.child)).map(|e| e.confidence);
             JointRow {
                 child: t.child,
@@ -152,6 +165,7 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
                 part_missing,
                 type_correct,
                 parent_correct,
+                parent_same_part,
                 confidence,
                 axis_error_deg,
                 hinge_distance_m,
@@ -159,6 +173,21 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
             }
         })
         .collect()
+}
+
+/// The rigid body a truth part belongs to, named by its topmost part: the part reached by
+/// walking up the truth tree while the joints are fixed. A part the truth does not know is its own
+/// body.
+fn rigid_body(truth: &TruthObject, part: PartId) -> PartId {
+    let mut id = part;
+    // A tree has fewer joints than parts; the bound only guards a malformed truth with a cycle.
+    for _ in 0..=truth.joints.len() {
+        match truth.joints.iter().find(|j| j.child == id && j.kind == JointKind::Fixed) {
+            Some(j) => id = j.parent,
+            None => break,
+        }
+    }
+    id
 }
 
 /// Truth parts of an object that the scan never saw: not in the model and not skipped by fitting.

@@ -501,6 +501,26 @@ mod tests {
     }
 
     #[test]
+    fn a_knob_hung_off_a_part_welded_to_its_truth_parent_has_its_parent_right_but_not_the_same_part() {
+        // The truth hangs a knob 6 off the body 1 and welds the top 5 to the body; a model that
+        // hangs the knob off the top moves it alike (one rigid body). Off the door 2, it does not.
+        let mut truth = cabinet_truth();
+        let knob = cuboid(Vec3::new(0.2, 0.0, 0.83), Vec3::new(0.04, 0.04, 0.03));
+        truth.objects[0].parts.push(TruthPart { id: 6, label: "knob".into(), shapes: vec![knob], meshes: vec![] });
+        truth.objects[0].joints.push(joint(1, 6, JointKind::Revolute, Vec3::Z, Vec3::new(0.2, 0.0, 0.83)));
+        let row_of_knob = |parent: PartId| {
+            let mut model = model_from_truth(&truth);
+            model.joints.last_mut().expect("the knob's joint").parent = parent;
+            let m = evaluate(&model, &truth);
+            let row = m.objects[0].joints.iter().find(|j| j.child == 6).cloned().expect("the knob's row");
+            (row.parent_correct, row.parent_same_part)
+        };
+        assert_eq!(row_of_knob(1), (true, true));
+        assert_eq!(row_of_knob(5), (true, false));
+        assert_eq!(row_of_knob(2), (false, false));
+    }
+
+    #[test]
     fn joint_errors_and_wrong_types_are_measured() {
         let truth = cabinet_truth();
         let mut model = model_from_truth(&truth);

@@ -9,8 +9,8 @@
 //! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one; a lid's longer edge towards the parent's centre) | on that edge, at the door's back face | 0 .. `revolute_upper_rad` |
 //! | `sliding_panel` | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
 //! | knob | revolute | the outward face normal (or the round axis a test found) | knob centre | −π .. π |
-//! | rocker | revolute | the part's in-plane axis along its shorter side | part centre | ± `rocker_tilt_rad` |
-//! | button | prismatic | into the parent | button centre | 0 .. `button_travel_m` |
+//! | rocker | revolute | the part's in-plane axis along its shorter side (a lever: the test's pivot line) | part centre (a lever: where it leaves its mount) | ± `rocker_tilt_rad` |
+//! | button | prismatic | into the parent (a round cap: along its own axis) | button centre | 0 .. `button_travel_m` |
 //! | `lift_off` | prismatic | the round body's axis, outward | lid centre | 0 .. half the body's height |
 //! | swing | revolute | the handle's long axis through its ends | on the body's axis | ± π/2 |
 //! | spin, turn | continuous | the part's round axis (spin) or the mount normal (turn) | part centre | display range ± π |
@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use super::joint::{Joint, JointKind};
 use super::vocabulary::Template;
 use crate::math::{UP, Vec3};
-use crate::primitive::Primitive;
+use crate::primitive::{Primitive, PrimitiveKind};
 use crate::scan::PartId;
 
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -129,7 +129,14 @@ pub fn estimate_joint(
             joint.upper = (2.0 * in_plane.dot(axis)).max(0.0).min(parent.extent_along(axis));
         }
         Template::Button => {
-            joint.axis_world = -out;
+            // A round cap is pressed along its own axis, into the parent; else into the face.
+            joint.axis_world = match child.kind {
+                PrimitiveKind::Cylinder => {
+                    let a = child.axes_world()[2];
+                    if a.dot(parent.center() - child.center()) < 0.0 { -a } else { a }
+                }
+                _ => -out,
+            };
             joint.upper = cfg.button_travel_m;
         }
         Template::Drawer => {
@@ -144,6 +151,14 @@ pub fn estimate_joint(
             joint.upper = std::f32::consts::PI;
         }
         Template::Rocker => {
+            joint.lower = -cfg.rocker_tilt_rad;
+            joint.upper = cfg.rocker_tilt_rad;
+            if let Some((axis, pivot)) = spec.axis_line {
+                // A lever's pivot line, found by its test.
+                joint.axis_world = axis;
+                joint.origin_world = pivot;
+                return joint;
+            }
             // About the in-plane box axis along the shorter side, through the centre.
             let axes = child.axes_world();
             let axis = (0..3)
@@ -151,8 +166,6 @@ pub fn estimate_joint(
                 .min_by(|&a, &b| child.size[b].total_cmp(&child.size[a]).then(a.cmp(&b)))
                 .map_or(axes[0], |a| axes[a]);
             joint.axis_world = axis;
-            joint.lower = -cfg.rocker_tilt_rad;
-            joint.upper = cfg.rocker_tilt_rad;
         }
         Template::Hinge | Template::LidHinge => {
             let (axis, pivot) = hinge(parent, child, out, spec.handle);
@@ -191,7 +204,7 @@ pub fn estimate_joint(
 fn round_axis(p: &Primitive) -> Vec3 {
     let axes = p.axes_world();
     match p.kind {
-        crate::primitive::PrimitiveKind::Cylinder | crate::primitive::PrimitiveKind::Capsule => axes[2],
+        PrimitiveKind::Cylinder | PrimitiveKind::Capsule => axes[2],
         _ => (0..3).min_by(|&a, &b| p.size[a].total_cmp(&p.size[b])).map_or(axes[2], |a| axes[a]),
     }
 }
@@ -323,6 +336,24 @@ mod tests {
             (None, None) => {}
             _ => panic!("{got:?}, expected {expected:?} for {child:?} with handle {handle}"),
         }
+    }
+
+    #[test]
+    fn a_round_button_on_a_desk_top_is_pressed_along_its_own_axis_not_towards_the_desk_front() {
+        // CALVIN's button: a cap 8 cm across, 3 cm tall, near the front edge of a desk's top
+        // (the desk's box is deep, so its front face is the nearest); it is pressed down.
+        let desk = Primitive::cuboid_at(Vec3::new(0.0, 0.04, 0.4), Vec3::new(1.05, 0.41, 0.8));
+        let cap = Primitive::new(
+            crate::primitive::PrimitiveKind::Cylinder,
+            Vec3::new(0.08, 0.08, 0.03),
+            crate::math::Pose::from_parts(Vec3::new(-0.35, -0.12, 0.58), crate::math::Quat::IDENTITY),
+        );
+        let j = estimate_joint(1, &desk, 2, &cap, &spec(JointKind::Prismatic, Template::Button, None, None), &KinematicsConfig::default());
+        assert!(j.axis_world.dot(Vec3::NEG_Z) > 0.999, "{}", j.axis_world);
+        // A square key is pressed into the face it sits on.
+        let key = Primitive::cuboid_at(Vec3::new(-0.35, -0.175, 0.58), Vec3::new(0.03, 0.02, 0.03));
+        let j = estimate_joint(1, &desk, 2, &key, &spec(JointKind::Prismatic, Template::Button, None, None), &KinematicsConfig::default());
+        assert!(j.axis_world.dot(Vec3::Y) > 0.999, "{}", j.axis_world);
     }
 
     #[test]

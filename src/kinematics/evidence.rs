@@ -7,13 +7,19 @@
 //! - **sliding panel**: a thin panel with another thin panel parallel to it (within 10°), in a
 //!   second plane (offset along the normal between 0.4× their summed thickness and 3× that sum
 //!   plus 3 cm) and overlapping it (projections overlap by ≥ 5 % of the smaller panel) slides: two
-//!   tracks of a sliding wardrobe. Coplanar double doors hinge.
+//!   tracks of a sliding wardrobe. Coplanar double doors hinge. Doors slide sideways, so the two
+//!   panels must lie side by side across a horizontal in-plane axis: stacked doors meeting at an
+//!   edge (a fridge's freezer door over its main door) hinge.
 //! - **lift-off**: a round lid (cylinder or sphere) on a round body (cylinder or sphere), axes
 //!   parallel within 18°, its centre within 30 % of the body's radius from the body's axis and
 //!   beyond the body's centre along it, lifts along that axis (pots, kettles, bottles, cups).
 //! - **swing handle**: a handle at least 0.8× as long as a round body is wide, its long axis
 //!   across the body's axis (within 17° of perpendicular), centred over the axis (within 30 % of
 //!   the radius) and at or above the body's centre, swings about its long axis through its ends.
+//! - **toggle lever**: a switch whose reach beyond its mount's face (along the face normal it
+//!   sticks out of) is at least its widest extent across that face is a lever and turns, about
+//!   the in-face axis along its narrower side through the point where it leaves the face; a squat
+//!   switch (a push switch, a slider lying inside its mount's bounds) keeps the class's default.
 //! - **grip-mounted** (unknown labels, and labels of rigid parts): a grip at the part's front
 //!   makes it a drawer or a door ([`super::joint_from_handle`]).
 //! - **spinning disc** (unknown labels): a cylinder no taller than 0.7× its diameter whose axis
@@ -28,7 +34,7 @@ use std::fmt::Write as _;
 
 use serde::{Deserialize, Serialize};
 
-use super::assign::joint_from_handle;
+use super::assign::{joint_from_handle, outward_direction};
 use super::joint::JointKind;
 use super::vocabulary::{GeometryTest, LabelMatch, Role, Template, Vocabulary};
 use crate::math::{UP, Vec3};
@@ -228,7 +234,32 @@ fn run_test(test: GeometryTest, vocab: &Vocabulary, ctx: &JointContext<'_>) -> T
             }
             None => (None, "swing handle: does not span a round body".into()),
         },
+        GeometryTest::ToggleLever => match toggle_line(ctx.parent, ctx.child) {
+            Some((line, reach, width)) => (
+                Some((JointKind::Revolute, Some(line))),
+                format!("toggle lever: stands {:.0} mm out of its mount, {:.0} mm wide: turns", reach * 1e3, width * 1e3),
+            ),
+            None => (None, "toggle lever: no farther out of its mount than it is wide".into()),
+        },
     }
+}
+
+/// When `switch` stands out of `mount`'s face at least as far as it is wide across that face
+/// (module docs): its pivot line (axis, point), how far it stands out and its width, metres.
+fn toggle_line(mount: &Primitive, switch: &Primitive) -> Option<((Vec3, Vec3), f32, f32)> {
+    let out = outward_direction(mount, switch, None);
+    let face = mount.center().dot(out) + 0.5 * mount.extent_along(out);
+    let reach = switch.center().dot(out) + 0.5 * switch.extent_along(out) - face;
+    let across: Vec<(f32, Vec3)> =
+        mount.axes_world().into_iter().filter(|a| a.dot(out).abs() < 0.5).map(|a| (switch.extent_along(a), a)).collect();
+    let width = across.iter().map(|(e, _)| *e).fold(0.0_f32, f32::max);
+    if width <= 0.0 || reach < width {
+        return None;
+    }
+    let (_, axis) = across.iter().copied().min_by(|a, b| a.0.total_cmp(&b.0))?;
+    let c = switch.center();
+    let pivot = c - out * (c.dot(out) - face);
+    Some(((axis, pivot), reach, width))
 }
 
 fn is_round(p: &Primitive) -> bool {
@@ -262,6 +293,15 @@ fn overlapping_parallel_panel(panel: &Primitive, others: &[&Primitive]) -> Optio
             }
             let thick = panel.size[k] + o.size[ko];
             let offset = (o.center() - c).dot(n).abs();
+            // Side by side, not stacked: the in-plane axis along which the centres lie farther
+            // apart (the way one would slide over the other) is horizontal.
+            let apart = in_plane
+                .iter()
+                .map(|&a| axes[a])
+                .max_by(|a, b| (o.center() - c).dot(*a).abs().total_cmp(&(o.center() - c).dot(*b).abs()))?;
+            if apart.dot(UP).abs() > 0.5 {
+                return None;
+            }
             if offset < 0.4 * thick || offset > 3.0 * thick + 0.03 {
                 return None;
             }
@@ -405,6 +445,17 @@ mod tests {
     }
 
     #[test]
+    fn a_fridge_door_stacked_under_its_freezer_door_hinges_though_their_edges_overlap() {
+        // Demo seed 19: the main door 3 cm in front of the freezer door's plane, their edges
+        // overlapping by 1.3 cm in height; they do not slide over each other.
+        let body = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.9), Vec3::new(0.78, 0.7, 1.18));
+        let main = Primitive::cuboid_at(Vec3::new(0.0, -0.36, 0.633), Vec3::new(0.76, 0.026, 1.144));
+        let freezer = Primitive::cuboid_at(Vec3::new(0.0, -0.388, 1.307), Vec3::new(0.78, 0.029, 0.23));
+        check(&ctx("door", &body, &main, vec![(&freezer, "door")]), (JointKind::Revolute, Template::Hinge));
+        check(&ctx("door", &body, &freezer, vec![(&main, "door")]), (JointKind::Revolute, Template::Hinge));
+    }
+
+    #[test]
     fn a_bucket_handle_swings_and_a_wheel_spins_and_an_unknown_disc_spins_too() {
         let bucket = cylinder(Vec3::new(0.0, 0.0, 0.15), 0.3, 0.3, Quat::IDENTITY);
         let bail = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.35), Vec3::new(0.31, 0.01, 0.12));
@@ -417,6 +468,26 @@ mod tests {
         check(&ctx("caster", &leg, &wheel, vec![]), (JointKind::Continuous, Template::Spin));
         check(&ctx("part_7", &leg, &wheel, vec![]), (JointKind::Continuous, Template::Spin));
         check(&ctx("part_7", &cabinet, &bar, vec![]), (JointKind::Fixed, Template::Fixed));
+    }
+
+    #[test]
+    fn a_switch_standing_out_of_its_plate_turns_and_a_flush_or_inset_one_is_pressed() {
+        // A wall plate facing -y; a toggle lever standing 7 cm out of it, 5 cm wide and 3 cm tall,
+        // turns about the vertical (its narrower side) where it leaves the plate.
+        let plate = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 1.2), Vec3::new(0.08, 0.01, 0.12));
+        let lever = Primitive::cuboid_at(Vec3::new(0.0, -0.04, 1.2), Vec3::new(0.05, 0.07, 0.03));
+        let d = decide(&Vocabulary::builtin(), &ctx("switch", &plate, &lever, vec![]));
+        assert_eq!((d.kind, d.evidence.template), (JointKind::Revolute, Template::Rocker), "{:?}", d.evidence);
+        let (axis, pivot) = d.axis_line.expect("a pivot line");
+        assert!(axis.dot(Vec3::Z).abs() > 0.99, "{axis}");
+        assert!((pivot.y + 0.005).abs() < 1e-4, "the pivot lies on the plate's face: {pivot}");
+        // A push switch, wider than it stands out, keeps the class default: pressed.
+        let push = Primitive::cuboid_at(Vec3::new(0.0, -0.015, 1.2), Vec3::new(0.05, 0.02, 0.03));
+        check(&ctx("switch", &plate, &push, vec![]), (JointKind::Prismatic, Template::Button));
+        // A slider lying inside its desk's bounds stands out of nothing.
+        let desk = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.4), Vec3::new(1.0, 0.4, 0.8));
+        let slider = Primitive::cuboid_at(Vec3::new(0.35, 0.1, 0.65), Vec3::new(0.15, 0.08, 0.07));
+        check(&ctx("switch", &desk, &slider, vec![]), (JointKind::Prismatic, Template::Button));
     }
 
     #[test]

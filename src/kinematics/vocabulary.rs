@@ -53,6 +53,8 @@ pub enum GeometryTest {
     LiftOff,
     /// A handle spanning a round body across its axis swings about its ends.
     SwingHandle,
+    /// A switch standing out of its mount farther than it is wide is a lever: it turns.
+    ToggleLever,
 }
 
 /// How a joint type is fitted to the geometry of a part ([`super::assign::estimate_joint`]).
@@ -430,6 +432,9 @@ mod tests {
         check("wheel", Some(("wheel", Continuous)));
         check("caster", Some(("wheel", Continuous)));
         check("sash", Some(("sliding_panel", Prismatic)));
+        // A latch turns unless a motion word says its bolt slides.
+        check("latch", Some(("latch", Revolute)));
+        check("slide_bolt", Some(("latch", Prismatic)));
         check("slide", Some(("sliding_panel", Prismatic)));
         // A motion word the class does not allow is ignored.
         check("hinge_drawer", Some(("drawer", Prismatic)));
