@@ -401,13 +401,11 @@ fn make_joint(
 ) -> (Joint, JointEvidence) {
     let vocab = cfg.vocabulary.as_ref();
     let label = labels.get(&child).copied().unwrap_or("");
-    // A handle (or knob) mounted on the child tells the front and the side that opens.
+    // A handle mounted on the child tells the front; a handle, knob or latch the side that opens.
     let mounted = |grip_only: bool| {
         tree.children(child)
             .into_iter()
-            .find(|c| {
-                labels.get(c).is_some_and(|l| vocab.is_grip(l) || (!grip_only && vocab.classify(l).is_some_and(|m| m.class.name == "knob")))
-            })
+            .find(|c| labels.get(c).is_some_and(|l| if grip_only { vocab.is_grip(l) } else { vocab.marks_free_edge(l) }))
             .and_then(|c| prims.get(&c))
             .map(Primitive::center)
     };

@@ -76,7 +76,7 @@ pub fn outward_direction(parent: &Primitive, child: &Primitive, handle: Option<V
 pub struct JointSpec {
     pub kind: JointKind,
     pub template: Template,
-    /// Centre of a handle or knob mounted on the child, if it has one.
+    /// Centre of a handle, knob or latch mounted on the child, if it has one ([`super::Vocabulary::marks_free_edge`]).
     pub handle: Option<Vec3>,
     /// The outward normal of the parent face the child is mounted on (paper eq. 1), when known.
     pub mount_normal: Option<Vec3>,

@@ -118,6 +118,9 @@ pub struct PartClass {
     /// Boards and boxes: the fitter keeps a cuboid unless another kind fits clearly better.
     #[serde(default)]
     pub prefer_box: bool,
+    /// Mounted on a door or lid to open or lock it, at its free edge (grips always are).
+    #[serde(default)]
+    pub marks_free_edge: bool,
     /// Classes this class is typically attached to.
     #[serde(default)]
     pub parents: Vec<String>,
@@ -378,6 +381,19 @@ impl Vocabulary {
         self.classify(label).is_some_and(|m| m.class.prefer_box)
     }
 
+    /// The name of the class a label reads as, if any.
+    #[must_use]
+    pub fn class_name(&self, label: &str) -> Option<&str> {
+        self.classify(label).map(|m| m.class.name.as_str())
+    }
+
+    /// Whether a part with this label, mounted on a door or lid, marks its free edge: a grip,
+    /// or a class with [`PartClass::marks_free_edge`] (a knob, a latch).
+    #[must_use]
+    pub fn marks_free_edge(&self, label: &str) -> bool {
+        self.classify(label).is_some_and(|m| m.class.role == Role::Grip || m.class.marks_free_edge)
+    }
+
     /// Whether `parent_label`'s class is a typical parent of `child_label`'s class.
     #[must_use]
     pub fn is_typical_parent(&self, child_label: &str, parent_label: &str) -> bool {
@@ -432,6 +448,10 @@ mod tests {
         check("wheel", Some(("wheel", Continuous)));
         check("caster", Some(("wheel", Continuous)));
         check("sash", Some(("sliding_panel", Prismatic)));
+        // What is mounted at a door's free edge: grips, knobs, latches; not another door.
+        let v = Vocabulary::builtin();
+        let marks: Vec<bool> = ["door_handle", "knob", "latch", "lock", "door", "body"].iter().map(|l| v.marks_free_edge(l)).collect();
+        assert_eq!(marks, [true, true, true, true, false, false]);
         // A latch turns unless a motion word says its bolt slides.
         check("latch", Some(("latch", Revolute)));
         check("slide_bolt", Some(("latch", Prismatic)));

@@ -186,13 +186,7 @@ pub fn build_part_tree(
                     f64::from(pc.weight / cfg.grip_set_into_factor.max(1.0))
                 }
                 Some(pc) => f64::from(pc.weight),
-                // No contact: a typical parent of the child's label beats any other part, the
-                // nearest within each group (weights in (1, 2] and (0, 1] × FALLBACK_WEIGHT).
-                None => {
-                    let nearness = 1.0 / (1.0 + f64::from(primitive_gap(p.primitive, c.primitive)));
-                    let typical = if vocab.is_typical_parent(c.label, p.label) { 1.0 } else { 0.0 };
-                    FALLBACK_WEIGHT * (typical + nearness)
-                }
+                None => uncontacted_weight(p, c, parts, &contacts, vocab, cfg),
             };
             edges.push(WeightedEdge { from: pi + 1, to: ci + 1, weight });
             edge_pairs.push(Some((p.id, c.id)));
@@ -209,11 +203,13 @@ pub fn build_part_tree(
         match edge_pairs[k] {
             Some((p, c)) => {
                 if !contacts.contains_key(&(p, c)) && !forced_parent.contains_key(&c) {
-                    warnings.push(Warning::new(
-                        "tree",
-                        format!("part {c}"),
-                        format!("touches no other part; attached to the nearest part {p} by a fixed joint"),
-                    ));
+                    let touched = contacts.keys().any(|&(_, child)| child == c);
+                    let message = if touched {
+                        format!("touches only parts of its own class; hung off part {p} nearby, which it does not touch")
+                    } else {
+                        format!("touches no other part; attached to the nearest part {p} by a fixed joint")
+                    };
+                    warnings.push(Warning::new("tree", format!("part {c}"), message));
                 }
                 parent.insert(c, p);
             }
@@ -232,6 +228,37 @@ pub fn build_part_tree(
         .map(|(&(p, c), pc)| ContactEdge { parent: p, child: c, weight: pc.weight, in_tree: parent.get(&c) == Some(&p) })
         .collect();
     (PartTree { root, parent, edges: tree_edges, contacts }, warnings)
+}
+
+/// A typical parent this close (in units of the contact test's plane distance) to a part that
+/// touches only its peers is taken as its mount ([`uncontacted_weight`]).
+const PEER_MOUNT_REACH: f32 = 2.0;
+
+/// The weight of a candidate edge `p → c` without contact. A typical parent of the child's label
+/// beats any other part, the nearest within each group (weights in (1, 2] and (0, 1] ×
+/// `FALLBACK_WEIGHT`). But a part that touches only its peers (parts of its own class: a fridge's
+/// lower door meeting its upper door edge to edge) is not mounted on them: a typical parent
+/// within [`PEER_MOUNT_REACH`] × the contact distance weighs as one barely touched
+/// (`label_prior`), so it wins over the peers (a scan may leave a seal's gap between a door and
+/// its body).
+fn uncontacted_weight(
+    p: &TreePart<'_>,
+    c: &TreePart<'_>,
+    parts: &[TreePart<'_>],
+    contacts: &BTreeMap<(PartId, PartId), PairContact>,
+    vocab: &Vocabulary,
+    cfg: &TreeConfig,
+) -> f64 {
+    let gap = primitive_gap(p.primitive, c.primitive);
+    let typical = vocab.is_typical_parent(c.label, p.label);
+    let class = vocab.class_name(c.label);
+    let mut touching = parts.iter().filter(|q| q.id != c.id && contacts.contains_key(&(q.id, c.id))).peekable();
+    let touches_only_peers = class.is_some() && touching.peek().is_some() && touching.all(|q| vocab.class_name(q.label) == class);
+    if typical && touches_only_peers && gap <= PEER_MOUNT_REACH * cfg.contact.dist_max_m {
+        return f64::from(cfg.label_prior.max(0.0));
+    }
+    let nearness = 1.0 / (1.0 + f64::from(gap));
+    FALLBACK_WEIGHT * (f64::from(u8::from(typical)) + nearness)
 }
 
 /// Whether `grip` (a grip-labelled part) also touches another part whose box lies inside
@@ -346,6 +373,37 @@ mod tests {
             let (tree, _) = build_part_tree(&view, &cfg, &Vocabulary::builtin(), &BTreeMap::new());
             assert_eq!(tree.parent.get(&3), Some(&2), "latch at x = {latch_x}: {:?}", tree.parent);
         }
+    }
+
+    #[test]
+    fn a_fridge_door_touching_only_the_door_above_hangs_off_the_body_behind_it() {
+        // ReplicaCAD's fridge (regression: the lower door hung off the upper one and turned about
+        // their shared edge): the lower door stands 3.3 cm proud of the body, and its top edge
+        // meets the upper door's bottom edge.
+        let body = Primitive::cuboid_at(Vec3::new(-0.052, 0.0, 0.953), Vec3::new(0.618, 0.698, 1.882));
+        let upper = Primitive::cuboid_at(Vec3::new(0.3055, 0.0, 1.326), Vec3::new(0.097, 0.712, 1.082));
+        let lower = Primitive::cuboid_at(Vec3::new(0.323, 0.0, 0.3925), Vec3::new(0.066, 0.686, 0.785));
+        let view = [
+            TreePart { id: 1, label: "body", primitive: &body },
+            TreePart { id: 2, label: "door", primitive: &upper },
+            TreePart { id: 3, label: "door", primitive: &lower },
+        ];
+        let cfg = TreeConfig::default();
+        assert!(crate::contact::contact(&upper, &lower, &cfg.contact).is_some(), "the doors meet");
+        assert!(crate::contact::contact(&body, &lower, &cfg.contact).is_none(), "the body is not touched");
+        let (tree, warnings) = build_part_tree(&view, &cfg, &Vocabulary::builtin(), &BTreeMap::new());
+        assert_eq!((tree.parent.get(&2), tree.parent.get(&3)), (Some(&1), Some(&1)), "{:?}", tree.parent);
+        assert!(warnings.iter().any(|w| w.subject == "part 3" && w.message.contains("own class")), "{warnings:?}");
+        // Beyond twice the contact distance the body is no mount: the door stays on its peer.
+        let far = Primitive::cuboid_at(Vec3::new(0.39, 0.0, 0.3925), Vec3::new(0.066, 0.686, 0.785));
+        let upper_deep = Primitive::cuboid_at(Vec3::new(0.339, 0.0, 1.326), Vec3::new(0.164, 0.712, 1.082));
+        let view = [
+            TreePart { id: 1, label: "body", primitive: &body },
+            TreePart { id: 2, label: "door", primitive: &upper_deep },
+            TreePart { id: 3, label: "door", primitive: &far },
+        ];
+        let (tree, _) = build_part_tree(&view, &cfg, &Vocabulary::builtin(), &BTreeMap::new());
+        assert_eq!(tree.parent.get(&3), Some(&2), "{:?}", tree.parent);
     }
 
     #[test]
