@@ -923,10 +923,15 @@ def simulate(sim, steps, q0, source, pose_links=()):
     return traj
 
 
+SIMULATORS = {  # case.engine -> sim of (case, mech, effects, gravity); gap_suite_physx.py adds "physx"
+    "mujoco": lambda case, mech, effects, gravity: MujocoSim(mujoco_model(mech, effects, gravity, case.solref_limit),
+                                                             mech.movable()),
+    "bullet": lambda case, mech, effects, gravity: BulletSim(mech, effects, gravity),
+}
+
+
 def make_sim(case, mech, effects, gravity=True):
-    if case.engine == "mujoco":
-        return MujocoSim(mujoco_model(mech, effects, gravity, case.solref_limit), mech.movable())
-    return BulletSim(mech, effects, gravity)
+    return SIMULATORS[case.engine](case, mech, effects, gravity)
 
 
 def check_rigid(case, nominal, rng):
@@ -941,12 +946,14 @@ def check_rigid(case, nominal, rng):
         sim.close()
 
 
-def compare_dynamics(what, got, want):
+def compare_dynamics(what, got, want, rtol=RIGID_RTOL):
+    """Raises unless (inertia, bias) `got` equals `want` to rtol (relative to the largest entry); returns the error."""
     (m1, b1), (m2, b2) = got, want
     scale = max(np.abs(m2).max(), np.abs(b2).max())
     err = max(np.abs(m1 - m2).max() / np.abs(m2).max(), np.abs(b1 - b2).max() / scale)
-    if not err <= RIGID_RTOL:
+    if not err <= rtol:
         raise SuiteError(f"{what}: engine and model.urdf differ in inertia or bias forces ({err:.2e} relative)")
+    return err
 
 
 def measure_restitution(case, engine_mech, effect):

@@ -204,7 +204,8 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
         /// Also write each object's reconstruction from the clean scan here, one folder per
-        /// asset (`scene.urdf`, `scene.srdf`, `objects/`, `scene_objects.json`, ...).
+        /// asset (`scene.urdf`, `scene.srdf`, `objects/`, `scene_objects.json`, ...), with the
+        /// truth it was scored against (`gt.json`, same frame: `partscene eval` reads it).
         #[arg(long, value_name = "DIR")]
         export: Option<PathBuf>,
     },

@@ -26,6 +26,9 @@ pub enum BenchError {
     /// The reconstruction could not be exported (`--export`).
     #[error("asset `{asset}`: cannot export the reconstruction: {source}")]
     Export { asset: String, source: Box<crate::export::ExportError> },
+    /// The truth could not be written as JSON (`--export`).
+    #[error("asset `{asset}`: cannot write its truth as JSON: {message}")]
+    TruthJson { asset: String, message: String },
     /// The asset has no link with geometry.
     #[error("asset `{asset}`: no link has geometry to scan")]
     NoGeometry { asset: String },

@@ -129,8 +129,13 @@ pub fn bench_asset(entry: &AssetEntry, cfg: &BenchConfig) -> Result<ObjectResult
     let (partial, _) = run(&cfg.partial);
     let (clean, clean_model) = run(&cfg.clean);
     if let Some(root) = &cfg.export_dir {
-        crate::export::write_scene_files(&export_folder(root, &entry.name), &clean_model, &crate::export::UrdfConfig::default())
+        let folder = export_folder(root, &entry.name);
+        crate::export::write_scene_files(&folder, &clean_model, &crate::export::UrdfConfig::default())
             .map_err(|e| BenchError::Export { asset: entry.name.clone(), source: Box::new(e) })?;
+        // The truth it was scored against, in the same frame (`partscene eval` reads it).
+        let truth_json = serde_json::to_vec_pretty(&truth.truth)
+            .map_err(|e| BenchError::TruthJson { asset: entry.name.clone(), message: e.to_string() })?;
+        crate::io::atomic_write(&folder.join("gt.json"), &truth_json)?;
     }
     let object = &truth.truth.objects[0];
     Ok(ObjectResult {
