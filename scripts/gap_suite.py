@@ -947,7 +947,8 @@ def check_rigid(case, nominal, rng):
 
 
 def compare_dynamics(what, got, want, rtol=RIGID_RTOL):
-    """Raises unless (inertia, bias) `got` equals `want` to rtol (relative to the largest entry); returns the error."""
+    """The error of (inertia, bias) `got` against `want`, relative to the largest entry of want's inertia (of either
+    for the bias); raises above rtol."""
     (m1, b1), (m2, b2) = got, want
     scale = max(np.abs(m2).max(), np.abs(b2).max())
     err = max(np.abs(m1 - m2).max() / np.abs(m2).max(), np.abs(b1 - b2).max() / scale)

@@ -38,8 +38,10 @@ Checks (a failure stops the run):
   effects        the drives' efforts and the armature, measured one step at a time at 8 random states (the
                  difference to the same articulation without them) and fitted by -k (q - r) - b qd and by the
                  added diagonal inertia, to EFFECT_RTOL of the values set (truth.json gives the values set and
-                 the fits); joints without effects get none. Before any damped case, a drive with damping 0.5
-                 on a free door under a constant effort must reach the speed of -b*qd after 1 s, to EFFECT_RTOL.
+                 the fits). Drives are implicit in the step, close to -b (qd + dt qdd) - k (q + dt qd - r), so a
+                 damper also shows as b*dt of inertia; joints without effects get under EFFECT_RTOL of the
+                 others' efforts. Before any damped case, a drive with damping 0.5 on a free door under a
+                 constant effort must reach the speed of -b*qd after 1 s, to EFFECT_RTOL.
   end stops      restitution measured in the engine (gap_suite.measure_restitution).
 
 Cases (efforts, noise and sampling as gap_suite.py's, each from its own generator

@@ -336,7 +336,16 @@ fn analyze_joint(
             // shrank below materiality, or a level the refinement cannot tell from none (within
             // two σ of it), is dropped, one at a time, and the rest refitted.
             let rules = effort::SelectionRules::default();
-            while let Some(k) = (0..refined.effects.len()).find(|&k| not_material(&refined.effects[k], &refined.param_std[k], &rules)) {
+            let mut dropped = Vec::new();
+            while let Some(k) =
+                (0..refined.effects.len()).find(|&k| not_material(&refined.effects[k], &refined.param_std[k], &rules, observed_range(y)))
+            {
+                dropped.push(format!(
+                    "{}: refined to {} ± {} on the measured positions — not told from none, not reported",
+                    refined.effects[k].kind.name(),
+                    refined.effects[k].params.first().map_or_else(|| "nothing".to_owned(), |v| format!("{v:.4}")),
+                    refined.param_std[k].first().map_or_else(|| "?".to_owned(), |v| format!("{v:.2e}"))
+                ));
                 let mut rest = refined.effects.clone();
                 rest.remove(k);
                 refined = if rest.is_empty() { nominal.clone() } else { fit::fit(&problem, &rest, Some(&free_mask(&rest)), None, 25) };
@@ -372,7 +381,7 @@ fn analyze_joint(
                     .iter()
                     .map(|e| g.effects.iter().position(|x| x.kind == e.kind).and_then(|k| g.confidence.get(k).copied()).unwrap_or(0.5))
                     .collect();
-                (refined, confidence, Vec::new())
+                (refined, confidence, dropped)
             }
         }
         None => select_here(),
@@ -389,7 +398,7 @@ fn analyze_joint(
                 // Stops act only at their position: their size is judged where they are found.
                 let sized = !matches!(e.kind, EffectKind::EndStop | EffectKind::Unknown);
                 let share = if sized { effort_share(e, joint, &terms, &derivs, &effort) } else { 1.0 };
-                let keep = !not_material(e, sd, &rules) && share >= rules.min_effort_share;
+                let keep = !not_material(e, sd, &rules, observed_range(y)) && share >= rules.min_effort_share;
                 if !keep {
                     rejected_here.push(format!(
                         "{}: fitted to {} ({:.1} % of the joint's own effort) — not material, not reported",
@@ -578,12 +587,16 @@ fn effort_share(e: &Effect, joint: &model::GapJoint, terms: &[model::JointTerms]
 /// Whether a refined effect is nothing: a weight change below materiality, a level within two
 /// standard deviations of the level that means no effect, or a Stribeck break-away beyond
 /// [`effort::SelectionRules::max_breakaway_ratio`] × its sliding level.
-fn not_material(e: &Effect, std: &[f64], rules: &effort::SelectionRules) -> bool {
+fn not_material(e: &Effect, std: &[f64], rules: &effort::SelectionRules, range: f64) -> bool {
     let level = e.params.first().copied().unwrap_or(f64::NAN);
     let sd = std.first().copied().unwrap_or(f64::NAN);
     match e.kind {
         EffectKind::MassScale => (level - 1.0).abs() < rules.min_mass_change || (sd.is_finite() && (level - 1.0).abs() < 2.0 * sd),
-        EffectKind::EndStop | EffectKind::Unknown => false,
+        // A stop the replay does not feel (its position could lie anywhere beyond the whole
+        // observed range) is the edge of the motion, not a stop: a push reversing the joint at
+        // its peak, or a spring not yet fitted when the stop was found, looked like one.
+        EffectKind::EndStop => sd.is_finite() && sd > range,
+        EffectKind::Unknown => false,
         // A break-away far above the sliding level is no static friction (see the rule).
         EffectKind::StribeckFriction if e.params.get(1).is_some_and(|&b| rules.breakaway_beyond_ratio(level, b)) => true,
         _ => sd.is_finite() && level.abs() < 2.0 * sd,
@@ -795,4 +808,22 @@ pub fn write_outputs(dir: &Path, model: &GapModel, report: &GapReport) -> Result
         put(&format!("plot_{safe}.svg"), plot::joint_svg(s).as_bytes())?;
     }
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stop_placed_at_the_edge_of_the_motion_that_no_replay_feels_is_not_material() {
+        // Regression (PhysX flap with a spring): a stop at the highest recorded angle, 1.8 rad,
+        // whose position the output error left at ± 1.3e6 rad, was reported beside the spring.
+        let rules = effort::SelectionRules::default();
+        let stop = Effect { kind: EffectKind::EndStop, params: vec![1.799, 0.0], blocks_upward: true };
+        assert!(not_material(&stop, &[1.3e6, 1.3e6], &rules, 1.8));
+        // A stop the motion runs into is located to millimetres.
+        assert!(!not_material(&stop, &[0.006, 0.014], &rules, 1.8));
+        // Not yet refined (effort space gives no σ): kept for the refinement to judge.
+        assert!(!not_material(&stop, &[f64::NAN, f64::NAN], &rules, 1.8));
+    }
 }
