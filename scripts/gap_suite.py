@@ -580,20 +580,25 @@ class BulletSim:
         pybullet.disconnect(self.cid)
 
 
-def check_bullet_joint_damping():
-    """Bullet's changeDynamics(jointDamping=b) must act as -b*qd: a constant effort u on inertia I
-    reaches u/b with time constant I/b. Fails loudly if this pybullet does otherwise."""
+def check_joint_damping(sim_class, what, rtol=0.01):
+    """An engine's viscous damping (`what`, made by `sim_class`) must act as -b*qd: a constant effort u on a free
+    door of inertia I reaches u/b (1 - exp(-b t / I)) after t = 1 s. Fails loudly if the engine does otherwise."""
     mech = door(0.5, 0.5, 1.2, open_limit=100.0)
     inertia = mech.link("door_panel").inertia[2, 2] + 1.2 * 0.25 ** 2
-    sim = BulletSim(mech, [fx("hinge", "viscous_damping", damping=0.5)])
+    sim = sim_class(mech, [fx("hinge", "viscous_damping", damping=0.5)])
     sim.set_state([0.0], [0.0])
     sim.hold([1.0])
     sim.advance(1000)
     expected = 1.0 / 0.5 * (1 - math.exp(-0.5 / inertia * 1.0))
     got = sim.state()[1][0]
     sim.close()
-    if abs(got - expected) > 0.01 * expected:
-        raise SuiteError(f"Bullet jointDamping does not act as -b*qd: {got} rad/s, expected {expected}")
+    if abs(got - expected) > rtol * expected:
+        raise SuiteError(f"{what} does not act as -b*qd: {got} rad/s after 1 s, expected {expected}")
+
+
+def check_bullet_joint_damping():
+    """Bullet's changeDynamics(jointDamping=b) must act as -b*qd (check_joint_damping)."""
+    check_joint_damping(BulletSim, "Bullet jointDamping")
 
 
 # ---------------------------------------------------------------- cases and excitation
