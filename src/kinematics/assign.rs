@@ -9,6 +9,7 @@
 //! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one; a lid's longer edge towards the parent's centre) | on that edge, at the door's back face | 0 .. `revolute_upper_rad` |
 //! | `sliding_panel` | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
 //! | knob | revolute | the outward face normal (or the round axis a test found) | knob centre | −π .. π |
+//! | lever | revolute | the outward face normal | a bar (≥ 2× as long as wide across the axis): its end away from a grip on it, else the end nearer the parent's centre; otherwise its centre | −π .. π |
 //! | rocker | revolute | the part's in-plane axis along its shorter side (a lever: the test's pivot line) | part centre (a lever: where it leaves its mount) | ± `rocker_tilt_rad` |
 //! | button | prismatic | into the parent (a round cap: along its own axis) | button centre | 0 .. `button_travel_m` |
 //! | `lift_off` | prismatic | the round body's axis, outward | lid centre | 0 .. half the body's height |
@@ -142,10 +143,12 @@ pub fn estimate_joint(
         Template::Drawer => {
             joint.upper = cfg.drawer_travel * parent.extent_along(out);
         }
-        Template::Knob => {
+        Template::Knob | Template::Lever => {
             if let Some((axis, origin)) = spec.axis_line {
                 joint.axis_world = axis;
                 joint.origin_world = origin;
+            } else if spec.template == Template::Lever {
+                joint.origin_world = lever_pivot(parent, child, out, spec.handle);
             }
             joint.lower = -std::f32::consts::PI;
             joint.upper = std::f32::consts::PI;
@@ -198,6 +201,34 @@ pub fn estimate_joint(
     }
     joint
 }
+
+/// Where a lever turning about `axis` is pivoted: a bar (its longest extent across the axis at
+/// least [`LEVER_MIN_ELONGATION`] × the other) turns about one end, the one away from a grip
+/// mounted on it, else the one nearer `parent`'s centre (the end its mount supports; the other
+/// reaches out); anything squarer turns about its centre, and so does a bar that passes through
+/// its mount to stand out of both faces (handles on both sides of a door, one spindle between).
+fn lever_pivot(parent: &Primitive, lever: &Primitive, axis: Vec3, grip: Option<Vec3>) -> Vec3 {
+    let c = lever.center();
+    let (pc, reach) = (parent.center().dot(axis), 0.5 * parent.extent_along(axis));
+    let (lc, half) = (c.dot(axis), 0.5 * lever.extent_along(axis));
+    if lc - half < pc - reach && lc + half > pc + reach {
+        return c;
+    }
+    let axes = lever.axes_world();
+    let mut across: Vec<(f32, Vec3)> = (0..3).filter(|&k| axes[k].dot(axis).abs() < 0.5).map(|k| (lever.size[k], axes[k])).collect();
+    across.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let [(long, dir), (wide, _)] = across[..] else { return c };
+    if long < LEVER_MIN_ELONGATION * wide {
+        return c;
+    }
+    let ends = [c + dir * (0.5 * long), c - dir * (0.5 * long)];
+    let away_from = |p: Vec3| if (ends[0] - p).length() >= (ends[1] - p).length() { ends[0] } else { ends[1] };
+    let nearer_to = |p: Vec3| if (ends[0] - p).length() <= (ends[1] - p).length() { ends[0] } else { ends[1] };
+    grip.map_or_else(|| nearer_to(parent.center()), away_from)
+}
+
+/// How many times longer than wide a lever must be to turn about an end ([`lever_pivot`]).
+pub const LEVER_MIN_ELONGATION: f32 = 2.0;
 
 /// The axis a round part turns about: a cylinder's or capsule's own axis, else the box axis of
 /// its smallest extent (a disc's thickness).
@@ -336,6 +367,29 @@ mod tests {
             (None, None) => {}
             _ => panic!("{got:?}, expected {expected:?} for {child:?} with handle {handle}"),
         }
+    }
+
+    #[test]
+    fn a_lever_turns_about_the_end_away_from_its_grip_else_the_end_its_mount_supports() {
+        // Meta-World's lever: a bar 20 cm long on the side of a base, a ball grip at its far end;
+        // and a lock bar on a door without a grip. Regression: both turned about their centres.
+        let base = Primitive::cuboid_at(Vec3::new(-0.05, 0.07, 0.2), Vec3::new(0.08, 0.17, 0.33));
+        let bar = Primitive::cuboid_at(Vec3::new(0.06, 0.01, 0.27), Vec3::new(0.04, 0.2, 0.025));
+        let cfg = KinematicsConfig::default();
+        let lever = |grip: Option<Vec3>| {
+            estimate_joint(1, &base, 2, &bar, &spec(JointKind::Revolute, Template::Lever, grip, Some(Vec3::X)), &cfg).origin_world
+        };
+        assert!((lever(Some(Vec3::new(0.07, -0.13, 0.25))) - Vec3::new(0.06, 0.11, 0.27)).length() < 1e-5);
+        assert!((lever(None) - Vec3::new(0.06, 0.11, 0.27)).length() < 1e-5, "the end nearer the base's centre");
+        // A square latch plate turns about its centre, and so does a bar through a door (ADROIT's
+        // latch: a handle on each face).
+        let plate = Primitive::cuboid_at(Vec3::new(0.06, 0.01, 0.27), Vec3::new(0.02, 0.06, 0.05));
+        let j = estimate_joint(1, &base, 2, &plate, &spec(JointKind::Revolute, Template::Lever, None, Some(Vec3::X)), &cfg);
+        assert!((j.origin_world - plate.center()).length() < 1e-6);
+        let door = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.1, 0.5, 1.0));
+        let through = Primitive::cuboid_at(Vec3::new(0.0, 0.1, 1.0), Vec3::new(0.28, 0.44, 0.07));
+        let j = estimate_joint(1, &door, 2, &through, &spec(JointKind::Revolute, Template::Lever, None, Some(Vec3::X)), &cfg);
+        assert!((j.origin_world - through.center()).length() < 1e-6);
     }
 
     #[test]

@@ -72,6 +72,9 @@ pub enum Template {
     Button,
     /// Turns about the mount normal through the part's centre.
     Knob,
+    /// Turns about the mount normal through one end of a bar: the end away from a grip on it,
+    /// else the end nearer the middle of what it is mounted on (a lever, a latch).
+    Lever,
     /// Tilts about its in-plane axis through its centre (a rocker switch).
     Rocker,
     /// Swings on a door's edge (a vertical mount normal is not trusted: a door found resting on
