@@ -22,6 +22,8 @@
 //!   switch (a push switch, a slider lying inside its mount's bounds) keeps the class's default.
 //! - **grip-mounted** (unknown labels, and labels of rigid parts): a grip at the part's front
 //!   makes it a drawer or a door ([`super::joint_from_handle`]).
+//! - **motion word** (unknown labels): a label that names a motion and no class (`slider`,
+//!   `hinge_2`) moves so, fitted by the type's default template.
 //! - **spinning disc** (unknown labels): a cylinder no taller than 0.7× its diameter whose axis
 //!   is horizontal (within 17°) spins about that axis, as wheels do.
 //!
@@ -55,6 +57,8 @@ pub const CONF_GRIP_GEOMETRY: f32 = 0.7;
 pub const CONF_LABEL_OVERRIDDEN: f32 = 0.55;
 /// An unknown label, a spinning disc.
 pub const CONF_DISC_GEOMETRY: f32 = 0.55;
+/// A label whose only reading is a motion word (`slider`): the type it names.
+pub const CONF_MOTION_WORD_ONLY: f32 = 0.7;
 /// An unknown label with no geometric evidence: kept rigid.
 pub const CONF_UNKNOWN_RIGID: f32 = 0.6;
 /// Parent confidence of a part touching nothing (hung off the nearest part).
@@ -112,7 +116,7 @@ pub fn decide(vocab: &Vocabulary, ctx: &JointContext<'_>) -> Decision {
         // A part named like the object's base that hangs off another part is not the base: its
         // name says nothing of how it moves (a window's second `body`, its sash).
         Some(m) if m.class.role == Role::Base => {
-            let mut d = decide_by_geometry(ctx);
+            let mut d = decide_by_geometry(vocab, ctx);
             d.evidence.label_rule = format!(
                 "label `{}` names the object's base (class {}), but the part hangs off another: geometry alone",
                 ctx.label, m.class.name
@@ -120,7 +124,7 @@ pub fn decide(vocab: &Vocabulary, ctx: &JointContext<'_>) -> Decision {
             d
         }
         Some(m) => decide_by_class(vocab, &m, ctx),
-        None => decide_by_geometry(ctx),
+        None => decide_by_geometry(vocab, ctx),
     }
 }
 
@@ -184,11 +188,18 @@ fn moved_by_grip(ctx: &JointContext<'_>, evidence: &mut JointEvidence, confidenc
     Some(Decision { kind, front: Some(front), axis_line: None, evidence: std::mem::take(evidence) })
 }
 
-fn decide_by_geometry(ctx: &JointContext<'_>) -> Decision {
+fn decide_by_geometry(vocab: &Vocabulary, ctx: &JointContext<'_>) -> Decision {
     let mut evidence =
         JointEvidence { label_rule: format!("label `{}` names no class: geometry alone", ctx.label), ..JointEvidence::default() };
     if let Some(d) = moved_by_grip(ctx, &mut evidence, CONF_GRIP_GEOMETRY, "") {
         return d;
+    }
+    if let Some((word, kind)) = vocab.motion_without_class(ctx.label).filter(|(_, k)| *k != JointKind::Fixed) {
+        evidence.label_rule = format!("label `{}` names no class; motion word `{word}` → {}", ctx.label, kind.name());
+        evidence.type_confidence = CONF_MOTION_WORD_ONLY;
+        evidence.runner_up = Some(JointKind::Fixed);
+        evidence.template = Template::default_for(kind);
+        return Decision { kind, front: None, axis_line: None, evidence };
     }
     if ctx.grip.is_some() {
         evidence.tests.push("grip-mounted: a grip, but not at the parent's front".into());
@@ -488,6 +499,18 @@ mod tests {
         let desk = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.4), Vec3::new(1.0, 0.4, 0.8));
         let slider = Primitive::cuboid_at(Vec3::new(0.35, 0.1, 0.65), Vec3::new(0.15, 0.08, 0.07));
         check(&ctx("switch", &desk, &slider, vec![]), (JointKind::Prismatic, Template::Button));
+    }
+
+    #[test]
+    fn a_label_that_names_only_a_motion_moves_so_and_says_it_is_unsure() {
+        let body = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.8, 0.5, 1.0));
+        let part = Primitive::cuboid_at(Vec3::new(0.0, -0.26, 0.8), Vec3::new(0.7, 0.02, 0.3));
+        check(&ctx("slider", &body, &part, vec![]), (JointKind::Prismatic, Template::Drawer));
+        let d = decide(&Vocabulary::builtin(), &ctx("hinge_2", &body, &part, vec![]));
+        assert_eq!((d.kind, d.evidence.template), (JointKind::Revolute, Template::Hinge));
+        assert!(d.evidence.type_confidence < CONF_LABEL_AND_GEOMETRY, "{:?}", d.evidence);
+        // A static part stays rigid.
+        check(&ctx("static_3", &body, &part, vec![]), (JointKind::Fixed, Template::Fixed));
     }
 
     #[test]

@@ -390,6 +390,16 @@ impl Vocabulary {
         self.classify(label).map(|m| m.class.name.as_str())
     }
 
+    /// The joint type a label's motion word names, for a label that names no class (`slider`,
+    /// `hinge_2`): what the label says of the part is how it moves.
+    #[must_use]
+    pub fn motion_without_class(&self, label: &str) -> Option<(String, JointKind)> {
+        if self.classify(label).is_some() {
+            return None;
+        }
+        label_tokens(label).find_map(|t| self.motion_words.get(&t).map(|k| (t.clone(), *k)))
+    }
+
     /// Whether a part with this label, mounted on a door or lid, marks its free edge: a grip,
     /// or a class with [`PartClass::marks_free_edge`] (a knob, a latch).
     #[must_use]
@@ -455,6 +465,13 @@ mod tests {
         let v = Vocabulary::builtin();
         let marks: Vec<bool> = ["door_handle", "knob", "latch", "lock", "door", "body"].iter().map(|l| v.marks_free_edge(l)).collect();
         assert_eq!(marks, [true, true, true, true, false, false]);
+        // Labels of a motion alone move so; rotors spin, blades turn.
+        assert_eq!(v.motion_without_class("slider"), Some(("slider".to_owned(), Prismatic)));
+        assert_eq!(v.motion_without_class("hinge_2"), Some(("hinge".to_owned(), Revolute)));
+        assert_eq!(v.motion_without_class("slider_drawer"), None, "a class decides");
+        check("propeller", Some(("rotor", Continuous)));
+        check("blade", Some(("blade", Revolute)));
+        check("spinning_blade", Some(("blade", Continuous)));
         // A latch turns unless a motion word says its bolt slides.
         check("latch", Some(("latch", Revolute)));
         check("slide_bolt", Some(("latch", Prismatic)));
