@@ -353,9 +353,10 @@ pub fn assemble_observed(
     let labels: BTreeMap<PartId, &str> = fitted.parts.iter().map(|p| (p.id, p.label.as_str())).collect();
     let mut joints = Vec::new();
     let mut evidence = Vec::new();
-    for tree in trees.values() {
+    for (obj, tree) in &trees {
+        let category = categories.get(obj).map_or("", String::as_str);
         for (&child, &parent) in &tree.parent {
-            let (joint, why) = make_joint(tree, parent, child, &final_prims, &labels, cfg, edits);
+            let (joint, why) = make_joint(tree, (parent, child), category, &final_prims, &labels, cfg, edits);
             joints.push(joint);
             evidence.push(why);
         }
@@ -392,8 +393,8 @@ pub fn assemble_observed(
 
 fn make_joint(
     tree: &PartTree,
-    parent: PartId,
-    child: PartId,
+    (parent, child): (PartId, PartId),
+    category: &str,
     prims: &BTreeMap<PartId, Primitive>,
     labels: &BTreeMap<PartId, &str>,
     cfg: &PipelineConfig,
@@ -419,12 +420,12 @@ fn make_joint(
         .filter(|&id| id != child && id != parent)
         .filter_map(|id| Some((prims.get(&id)?, labels.get(&id).copied().unwrap_or(""))))
         .collect();
-    let ctx = JointContext { label, parent: pp, child: cp, grip: mounted(true), others: object_parts };
+    let ctx = JointContext { label, category, parent: pp, child: cp, grip: mounted(true), others: object_parts };
     let mut decision = decide(vocab, &ctx);
     decision.evidence.child = child;
     if let Some(&pinned) = edits.joint_kind.get(&child) {
         decision.kind = pinned;
-        decision.evidence.template = vocab.classify(label).map_or(Template::default_for(pinned), |m| m.class.template(pinned));
+        decision.evidence.template = vocab.classify_in(label, category).map_or(Template::default_for(pinned), |m| m.class.template(pinned));
         decision.evidence.tests.push(format!("type pinned by a person: {}", pinned.name()));
         decision.evidence.type_confidence = CONF_PINNED;
     }

@@ -171,9 +171,11 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
                 }
             }
             let body = |id: PartId| rigid_body(truth, id);
-            let joined_to_parent_body = model.joints.iter().any(|j| {
-                (j.child == t.child && body(j.parent) == body(t.parent)) || (j.parent == t.child && body(j.child) == body(t.parent))
-            });
+            // Reversed (the truth parent hung off the child), only for the truth parent itself.
+            let joined_to_parent_body = model
+                .joints
+                .iter()
+                .any(|j| (j.child == t.child && body(j.parent) == body(t.parent)) || (j.parent == t.child && j.child == t.parent));
             let parent_correct = joined_to_parent_body && !part_missing;
             let parent_same_part = same_pair.is_some() && !part_missing;
             let confidence = predicted.and_then(|p| model.evidence.iter().find(|e| e.child == p.child)).map(|e| e.confidence);

@@ -307,6 +307,9 @@ fn analyze_joint(
     let derivs = observe::smoothed_derivatives(&rec.time_s, y, 7);
     let all = vec![true; n];
     let problem = fit::Problem::new(input, y, &all, sigma, joint);
+    // The span a stop's position must be told within (a joint resting on its stop all along
+    // moves only by the noise).
+    let stop_span = observed_range(y).max(STOP_SPAN_NOISE_SIGMAS * sigma);
     let nominal_physics = JointPhysics::nominal(joint);
     let nominal = fit::fit(&problem, &[], None, None, 25);
     let residual = fit::segment_residual(&problem, &nominal_physics, &nominal.states);
@@ -338,10 +341,10 @@ fn analyze_joint(
             let rules = effort::SelectionRules::default();
             let mut dropped = Vec::new();
             while let Some(k) =
-                (0..refined.effects.len()).find(|&k| not_material(&refined.effects[k], &refined.param_std[k], &rules, observed_range(y)))
+                (0..refined.effects.len()).find(|&k| not_material(&refined.effects[k], &refined.param_std[k], &rules, stop_span))
             {
                 dropped.push(format!(
-                    "{}: refined to {} ± {} on the measured positions — not told from none, not reported",
+                    "{}: refined to {} ± {} on the measured positions — not told from none (a stop: not located within the motion), not reported",
                     refined.effects[k].kind.name(),
                     refined.effects[k].params.first().map_or_else(|| "nothing".to_owned(), |v| format!("{v:.4}")),
                     refined.param_std[k].first().map_or_else(|| "?".to_owned(), |v| format!("{v:.2e}"))
@@ -398,7 +401,7 @@ fn analyze_joint(
                 // Stops act only at their position: their size is judged where they are found.
                 let sized = !matches!(e.kind, EffectKind::EndStop | EffectKind::Unknown);
                 let share = if sized { effort_share(e, joint, &terms, &derivs, &effort) } else { 1.0 };
-                let keep = !not_material(e, sd, &rules, observed_range(y)) && share >= rules.min_effort_share;
+                let keep = !not_material(e, sd, &rules, stop_span) && share >= rules.min_effort_share;
                 if !keep {
                     rejected_here.push(format!(
                         "{}: fitted to {} ({:.1} % of the joint's own effort) — not material, not reported",
@@ -587,14 +590,18 @@ fn effort_share(e: &Effect, joint: &model::GapJoint, terms: &[model::JointTerms]
 /// Whether a refined effect is nothing: a weight change below materiality, a level within two
 /// standard deviations of the level that means no effect, or a Stribeck break-away beyond
 /// [`effort::SelectionRules::max_breakaway_ratio`] × its sliding level.
+/// Noise σs a stop's position span is floored at ([`not_material`]).
+const STOP_SPAN_NOISE_SIGMAS: f64 = 20.0;
+
 fn not_material(e: &Effect, std: &[f64], rules: &effort::SelectionRules, range: f64) -> bool {
     let level = e.params.first().copied().unwrap_or(f64::NAN);
     let sd = std.first().copied().unwrap_or(f64::NAN);
     match e.kind {
         EffectKind::MassScale => (level - 1.0).abs() < rules.min_mass_change || (sd.is_finite() && (level - 1.0).abs() < 2.0 * sd),
         // A stop the replay does not feel (its position could lie anywhere beyond the whole
-        // observed range) is the edge of the motion, not a stop: a push reversing the joint at
-        // its peak, or a spring not yet fitted when the stop was found, looked like one.
+        // observed range, `range` floored at the noise by the caller) is the edge of the motion,
+        // not a stop: a push reversing the joint at its peak, or a spring not yet fitted when the
+        // stop was found, looked like one.
         EffectKind::EndStop => sd.is_finite() && sd > range,
         EffectKind::Unknown => false,
         // A break-away far above the sliding level is no static friction (see the rule).

@@ -9,9 +9,9 @@
 //! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one; a lid's longer edge towards the parent's centre) | on that edge, at the door's back face | 0 .. `revolute_upper_rad` |
 //! | `sliding_panel` | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
 //! | knob | revolute | the outward face normal (or the round axis a test found) | knob centre | −π .. π |
-//! | lever | revolute | the outward face normal | a bar (≥ 2× as long as wide across the axis): its end away from a grip on it, else the end nearer the parent's centre; otherwise its centre | −π .. π |
+//! | lever | revolute | the outward face normal | a bar (≥ `lever_min_elongation` × as long as wide across the axis): its end away from a grip on it, else the end nearer the parent's centre; otherwise, or through its mount, its centre | −π .. π |
 //! | rocker | revolute | the part's in-plane axis along its shorter side (a lever: the test's pivot line) | part centre (a lever: where it leaves its mount) | ± `rocker_tilt_rad` |
-//! | button | prismatic | into the parent (a round cap: along its own axis) | button centre | 0 .. `button_travel_m` |
+//! | button | prismatic | into the parent (a round cap no taller than wide: along its own axis) | button centre | 0 .. `button_travel_m` |
 //! | `lift_off` | prismatic | the round body's axis, outward | lid centre | 0 .. half the body's height |
 //! | swing | revolute | the handle's long axis through its ends | on the body's axis | ± π/2 |
 //! | spin, turn | continuous | the part's round axis (spin) or the mount normal (turn) | part centre | display range ± π |
@@ -37,11 +37,24 @@ pub struct KinematicsConfig {
     pub button_travel_m: f32,
     /// Tilt of a rocker switch either way, radians.
     pub rocker_tilt_rad: f32,
+    /// How many times longer than wide (across its axis) a lever must be to turn about an end.
+    #[serde(default = "default_lever_min_elongation")]
+    pub lever_min_elongation: f32,
+}
+
+fn default_lever_min_elongation() -> f32 {
+    2.0
 }
 
 impl Default for KinematicsConfig {
     fn default() -> Self {
-        Self { revolute_upper_rad: std::f32::consts::FRAC_PI_2, drawer_travel: 0.85, button_travel_m: 0.005, rocker_tilt_rad: 0.26 }
+        Self {
+            revolute_upper_rad: std::f32::consts::FRAC_PI_2,
+            drawer_travel: 0.85,
+            button_travel_m: 0.005,
+            rocker_tilt_rad: 0.26,
+            lever_min_elongation: default_lever_min_elongation(),
+        }
     }
 }
 
@@ -132,7 +145,7 @@ pub fn estimate_joint(
         Template::Button => {
             // A round cap is pressed along its own axis, into the parent; else into the face.
             joint.axis_world = match child.kind {
-                PrimitiveKind::Cylinder => {
+                PrimitiveKind::Cylinder if child.size.z <= child.size.x.max(child.size.y) => {
                     let a = child.axes_world()[2];
                     if a.dot(parent.center() - child.center()) < 0.0 { -a } else { a }
                 }
@@ -148,7 +161,7 @@ pub fn estimate_joint(
                 joint.axis_world = axis;
                 joint.origin_world = origin;
             } else if spec.template == Template::Lever {
-                joint.origin_world = lever_pivot(parent, child, out, spec.handle);
+                joint.origin_world = lever_pivot(parent, child, out, spec.handle, cfg.lever_min_elongation);
             }
             joint.lower = -std::f32::consts::PI;
             joint.upper = std::f32::consts::PI;
@@ -166,7 +179,7 @@ pub fn estimate_joint(
             let axes = child.axes_world();
             let axis = (0..3)
                 .filter(|&a| axes[a].dot(out).abs() < 0.5)
-                .min_by(|&a, &b| child.size[b].total_cmp(&child.size[a]).then(a.cmp(&b)))
+                .min_by(|&a, &b| child.size[a].total_cmp(&child.size[b]).then(a.cmp(&b)))
                 .map_or(axes[0], |a| axes[a]);
             joint.axis_world = axis;
         }
@@ -203,11 +216,11 @@ pub fn estimate_joint(
 }
 
 /// Where a lever turning about `axis` is pivoted: a bar (its longest extent across the axis at
-/// least [`LEVER_MIN_ELONGATION`] × the other) turns about one end, the one away from a grip
+/// least `min_elongation` × the other) turns about one end, the one away from a grip
 /// mounted on it, else the one nearer `parent`'s centre (the end its mount supports; the other
 /// reaches out); anything squarer turns about its centre, and so does a bar that passes through
 /// its mount to stand out of both faces (handles on both sides of a door, one spindle between).
-fn lever_pivot(parent: &Primitive, lever: &Primitive, axis: Vec3, grip: Option<Vec3>) -> Vec3 {
+fn lever_pivot(parent: &Primitive, lever: &Primitive, axis: Vec3, grip: Option<Vec3>, min_elongation: f32) -> Vec3 {
     let c = lever.center();
     let (pc, reach) = (parent.center().dot(axis), 0.5 * parent.extent_along(axis));
     let (lc, half) = (c.dot(axis), 0.5 * lever.extent_along(axis));
@@ -218,7 +231,7 @@ fn lever_pivot(parent: &Primitive, lever: &Primitive, axis: Vec3, grip: Option<V
     let mut across: Vec<(f32, Vec3)> = (0..3).filter(|&k| axes[k].dot(axis).abs() < 0.5).map(|k| (lever.size[k], axes[k])).collect();
     across.sort_by(|a, b| b.0.total_cmp(&a.0));
     let [(long, dir), (wide, _)] = across[..] else { return c };
-    if long < LEVER_MIN_ELONGATION * wide {
+    if long < min_elongation * wide {
         return c;
     }
     let ends = [c + dir * (0.5 * long), c - dir * (0.5 * long)];
@@ -226,9 +239,6 @@ fn lever_pivot(parent: &Primitive, lever: &Primitive, axis: Vec3, grip: Option<V
     let nearer_to = |p: Vec3| if (ends[0] - p).length() <= (ends[1] - p).length() { ends[0] } else { ends[1] };
     grip.map_or_else(|| nearer_to(parent.center()), away_from)
 }
-
-/// How many times longer than wide a lever must be to turn about an end ([`lever_pivot`]).
-pub const LEVER_MIN_ELONGATION: f32 = 2.0;
 
 /// The axis a round part turns about: a cylinder's or capsule's own axis, else the box axis of
 /// its smallest extent (a disc's thickness).
@@ -380,6 +390,8 @@ mod tests {
             estimate_joint(1, &base, 2, &bar, &spec(JointKind::Revolute, Template::Lever, grip, Some(Vec3::X)), &cfg).origin_world
         };
         assert!((lever(Some(Vec3::new(0.07, -0.13, 0.25))) - Vec3::new(0.06, 0.11, 0.27)).length() < 1e-5);
+        // A grip at the end its mount supports: the grip decides.
+        assert!((lever(Some(Vec3::new(0.07, 0.13, 0.25))) - Vec3::new(0.06, -0.09, 0.27)).length() < 1e-5);
         assert!((lever(None) - Vec3::new(0.06, 0.11, 0.27)).length() < 1e-5, "the end nearer the base's centre");
         // A square latch plate turns about its centre, and so does a bar through a door (ADROIT's
         // latch: a handle on each face).

@@ -90,6 +90,8 @@ pub struct JointEvidence {
 /// What [`decide`] needs to know about a part and its surroundings.
 pub struct JointContext<'a> {
     pub label: &'a str,
+    /// The object's category (`toilet`): some words name other classes in some objects.
+    pub category: &'a str,
     pub parent: &'a Primitive,
     pub child: &'a Primitive,
     /// Centre of a grip mounted on the child, if any.
@@ -112,7 +114,7 @@ pub struct Decision {
 /// Decides the joint type of the part in `ctx` (module docs).
 #[must_use]
 pub fn decide(vocab: &Vocabulary, ctx: &JointContext<'_>) -> Decision {
-    match vocab.classify(ctx.label) {
+    match vocab.classify_in(ctx.label, ctx.category) {
         // A part named like the object's base that hangs off another part is not the base: its
         // name says nothing of how it moves (a window's second `body`, its sash).
         Some(m) if m.class.role == Role::Base => {
@@ -142,7 +144,11 @@ fn label_rule(m: &LabelMatch<'_>, label: &str) -> String {
 fn decide_by_class(vocab: &Vocabulary, m: &LabelMatch<'_>, ctx: &JointContext<'_>) -> Decision {
     let class = m.class;
     let compound = if m.whole_token { 1.0 } else { CONF_COMPOUND_FACTOR };
-    let mut evidence = JointEvidence { label_rule: label_rule(m, ctx.label), ..JointEvidence::default() };
+    let mut rule = label_rule(m, ctx.label);
+    if vocab.classify(ctx.label).is_none_or(|plain| plain.class.name != m.class.name) {
+        let _ = write!(rule, " (so in a {})", ctx.category);
+    }
+    let mut evidence = JointEvidence { label_rule: rule, ..JointEvidence::default() };
     let mut kind = class.default_joint();
     let mut type_conf = CONF_LABEL_ONLY_TYPE;
     let mut axis_line = None;
@@ -191,15 +197,15 @@ fn moved_by_grip(ctx: &JointContext<'_>, evidence: &mut JointEvidence, confidenc
 fn decide_by_geometry(vocab: &Vocabulary, ctx: &JointContext<'_>) -> Decision {
     let mut evidence =
         JointEvidence { label_rule: format!("label `{}` names no class: geometry alone", ctx.label), ..JointEvidence::default() };
-    if let Some(d) = moved_by_grip(ctx, &mut evidence, CONF_GRIP_GEOMETRY, "") {
-        return d;
-    }
-    if let Some((word, kind)) = vocab.motion_without_class(ctx.label).filter(|(_, k)| *k != JointKind::Fixed) {
+    if let Some((word, kind)) = vocab.motion_without_class(ctx.label) {
         evidence.label_rule = format!("label `{}` names no class; motion word `{word}` → {}", ctx.label, kind.name());
         evidence.type_confidence = CONF_MOTION_WORD_ONLY;
         evidence.runner_up = Some(JointKind::Fixed);
         evidence.template = Template::default_for(kind);
         return Decision { kind, front: None, axis_line: None, evidence };
+    }
+    if let Some(d) = moved_by_grip(ctx, &mut evidence, CONF_GRIP_GEOMETRY, "") {
+        return d;
     }
     if ctx.grip.is_some() {
         evidence.tests.push("grip-mounted: a grip, but not at the parent's front".into());
@@ -418,7 +424,7 @@ mod tests {
     }
 
     fn ctx<'a>(label: &'a str, parent: &'a Primitive, child: &'a Primitive, others: Vec<(&'a Primitive, &'a str)>) -> JointContext<'a> {
-        JointContext { label, parent, child, grip: None, others }
+        JointContext { label, category: "object", parent, child, grip: None, others }
     }
 
     /// The type and template a part gets.
@@ -502,6 +508,17 @@ mod tests {
     }
 
     #[test]
+    fn a_toilet_seat_hinges_and_says_the_category_decided() {
+        let bowl = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.2), Vec3::new(0.4, 0.5, 0.4));
+        let seat = Primitive::cuboid_at(Vec3::new(0.0, -0.02, 0.41), Vec3::new(0.38, 0.45, 0.02));
+        let in_toilet = JointContext { category: "Toilet", ..ctx("seat", &bowl, &seat, vec![]) };
+        let d = decide(&Vocabulary::builtin(), &in_toilet);
+        assert_eq!((d.kind, d.evidence.template), (JointKind::Revolute, Template::LidHinge), "{:?}", d.evidence);
+        assert!(d.evidence.label_rule.contains("in a Toilet"), "{}", d.evidence.label_rule);
+        check(&ctx("seat", &bowl, &seat, vec![]), (JointKind::Fixed, Template::Fixed));
+    }
+
+    #[test]
     fn a_label_that_names_only_a_motion_moves_so_and_says_it_is_unsure() {
         let body = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 0.5), Vec3::new(0.8, 0.5, 1.0));
         let part = Primitive::cuboid_at(Vec3::new(0.0, -0.26, 0.8), Vec3::new(0.7, 0.02, 0.3));
@@ -509,8 +526,15 @@ mod tests {
         let d = decide(&Vocabulary::builtin(), &ctx("hinge_2", &body, &part, vec![]));
         assert_eq!((d.kind, d.evidence.template), (JointKind::Revolute, Template::Hinge));
         assert!(d.evidence.type_confidence < CONF_LABEL_AND_GEOMETRY, "{:?}", d.evidence);
-        // A static part stays rigid.
-        check(&ctx("static_3", &body, &part, vec![]), (JointKind::Fixed, Template::Fixed));
+        // A static part stays rigid, whatever its shape or what is mounted on it.
+        let disc = Primitive::new(
+            PrimitiveKind::Cylinder,
+            Vec3::new(0.3, 0.3, 0.05),
+            Pose::from_parts(Vec3::ZERO, Quat::from_rotation_x(std::f32::consts::FRAC_PI_2)),
+        );
+        check(&ctx("static_3", &body, &disc, vec![]), (JointKind::Fixed, Template::Fixed));
+        let gripped = JointContext { grip: Some(Vec3::new(0.0, -0.3, 0.8)), ..ctx("static_3", &body, &part, vec![]) };
+        check(&gripped, (JointKind::Fixed, Template::Fixed));
     }
 
     #[test]

@@ -172,12 +172,25 @@ impl LabelMatch<'_> {
     }
 }
 
-/// The vocabulary: classes in priority order and motion words.
+/// Objects whose category changes what a label word names (a toilet's seat hinges up like its
+/// lid, where a chair's seat is rigid).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CategoryRule {
+    /// Category words (lowercase): the rule holds in an object whose category has one as a token.
+    pub words: Vec<String>,
+    /// Label word → the class it names in those objects.
+    pub classes: BTreeMap<String, String>,
+}
+
+/// The vocabulary: classes in priority order, motion words and category rules.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Vocabulary {
     #[serde(default)]
     motion_words: BTreeMap<String, JointKind>,
+    #[serde(rename = "category", default)]
+    categories: Vec<CategoryRule>,
     #[serde(rename = "class", default)]
     classes: Vec<PartClass>,
 }
@@ -248,7 +261,8 @@ impl Vocabulary {
         classes.extend(rest);
         let mut motion_words = self.motion_words.clone();
         motion_words.extend(extra.motion_words);
-        Self { motion_words, classes }
+        let categories = extra.categories.into_iter().chain(self.categories.iter().cloned()).collect();
+        Self { motion_words, categories, classes }
     }
 
     fn validate(&self, source_name: &str) -> Result<(), VocabularyError> {
@@ -283,6 +297,21 @@ impl Vocabulary {
                 return Err(class_err(&c.name, format!("parent class `{p}` is not defined")));
             }
         }
+        for rule in &self.categories {
+            let lowercase = |w: &String| !w.is_empty() && w.chars().all(|ch| ch.is_ascii_lowercase());
+            if let Some(w) = rule.words.iter().chain(rule.classes.keys()).find(|w| !lowercase(w)) {
+                return Err(VocabularyError::Parse {
+                    source_name: source_name.to_owned(),
+                    message: format!("category rule word {w:?}: expected lowercase letters a-z only"),
+                });
+            }
+            if let Some(c) = rule.classes.values().find(|c| !seen.contains(c.as_str())) {
+                return Err(VocabularyError::Parse {
+                    source_name: source_name.to_owned(),
+                    message: format!("category rule for {:?}: class `{c}` is not defined", rule.words),
+                });
+            }
+        }
         if let Some(w) = self.motion_words.keys().find(|w| w.is_empty() || !w.chars().all(|ch| ch.is_ascii_lowercase())) {
             return Err(VocabularyError::Parse {
                 source_name: source_name.to_owned(),
@@ -314,6 +343,23 @@ impl Vocabulary {
         let matches = tokens.iter().enumerate().filter_map(|(k, t)| self.token_class(t).map(|m| (k, m)));
         let (_, (index, word, whole_token)) = matches.min_by_key(|(k, (i, _, whole))| (*i, !*whole, std::cmp::Reverse(*k)))?;
         Some(LabelMatch { class: &self.classes[index], word, whole_token, motion })
+    }
+
+    /// Reads a label of a part of an object of `category`: a category rule's word in the label
+    /// names the rule's class (the last such word); else as [`Self::classify`].
+    #[must_use]
+    pub fn classify_in(&self, label: &str, category: &str) -> Option<LabelMatch<'_>> {
+        let category_tokens: Vec<String> = label_tokens(category).collect();
+        let rule = self.categories.iter().find(|r| r.words.iter().any(|w| category_tokens.contains(w)));
+        let tokens: Vec<String> = label_tokens(label).collect();
+        let overridden = rule.and_then(|r| tokens.iter().rev().find_map(|t| Some((t.clone(), self.class(r.classes.get(t)?)?))));
+        match overridden {
+            Some((word, class)) => {
+                let motion = tokens.iter().find_map(|t| self.motion_words.get(t).map(|k| (t.clone(), *k)));
+                Some(LabelMatch { class, word, whole_token: true, motion })
+            }
+            None => self.classify(label),
+        }
     }
 
     /// The class a single token names: the whole token if it is a word, else the word inside it
@@ -472,6 +518,10 @@ mod tests {
         check("propeller", Some(("rotor", Continuous)));
         check("blade", Some(("blade", Revolute)));
         check("spinning_blade", Some(("blade", Continuous)));
+        // A toilet's seat hinges like its lid; a chair's is rigid.
+        let seat_in = |category: &str| v.classify_in("seat", category).map(|m| m.class.name.clone());
+        assert_eq!(seat_in("Toilet"), Some("lid".to_owned()));
+        assert_eq!(seat_in("chair"), Some("seat".to_owned()));
         // A latch turns unless a motion word says its bolt slides.
         check("latch", Some(("latch", Revolute)));
         check("slide_bolt", Some(("latch", Prismatic)));

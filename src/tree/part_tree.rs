@@ -47,15 +47,29 @@ pub struct TreeConfig {
     /// Divisor of a grip's contact with a part that has a part set into it which the grip touches.
     #[serde(default = "default_grip_set_into_factor")]
     pub grip_set_into_factor: f32,
+    /// A part that touches only its peers hangs off a typical parent within this many contact
+    /// distances (`contact.dist_max_m`) that it does not touch ([`uncontacted_weight`]).
+    #[serde(default = "default_peer_mount_reach")]
+    pub peer_mount_reach: f32,
 }
 
 fn default_grip_set_into_factor() -> f32 {
     1.5
 }
 
+fn default_peer_mount_reach() -> f32 {
+    2.0
+}
+
 impl Default for TreeConfig {
     fn default() -> Self {
-        Self { contact: ContactConfig::default(), root_prior: 1.0, label_prior: 1.0, grip_set_into_factor: default_grip_set_into_factor() }
+        Self {
+            contact: ContactConfig::default(),
+            root_prior: 1.0,
+            label_prior: 1.0,
+            grip_set_into_factor: default_grip_set_into_factor(),
+            peer_mount_reach: default_peer_mount_reach(),
+        }
     }
 }
 
@@ -156,6 +170,16 @@ pub fn build_part_tree(
         edges.push(WeightedEdge { from: 0, to: i + 1, weight });
         edge_pairs.push(None);
     }
+    // Parts whose every contact is with a part of their own class (a door meeting a door).
+    let only_peers: std::collections::BTreeSet<PartId> = parts
+        .iter()
+        .filter(|c| {
+            let class = vocab.class_name(c.label);
+            let mut touching = parts.iter().filter(|q| q.id != c.id && contacts.contains_key(&(q.id, c.id))).peekable();
+            class.is_some() && touching.peek().is_some() && touching.all(|q| vocab.class_name(q.label) == class)
+        })
+        .map(|c| c.id)
+        .collect();
     let mut forced: BTreeMap<usize, usize> = BTreeMap::new();
     for (child, parent) in forced_parent {
         match (index.get(child), index.get(parent)) {
@@ -186,7 +210,7 @@ pub fn build_part_tree(
                     f64::from(pc.weight / cfg.grip_set_into_factor.max(1.0))
                 }
                 Some(pc) => f64::from(pc.weight),
-                None => uncontacted_weight(p, c, parts, &contacts, vocab, cfg),
+                None => uncontacted_weight(p, c, only_peers.contains(&c.id), vocab, cfg),
             };
             edges.push(WeightedEdge { from: pi + 1, to: ci + 1, weight });
             edge_pairs.push(Some((p.id, c.id)));
@@ -203,8 +227,7 @@ pub fn build_part_tree(
         match edge_pairs[k] {
             Some((p, c)) => {
                 if !contacts.contains_key(&(p, c)) && !forced_parent.contains_key(&c) {
-                    let touched = contacts.keys().any(|&(_, child)| child == c);
-                    let message = if touched {
+                    let message = if only_peers.contains(&c) {
                         format!("touches only parts of its own class; hung off part {p} nearby, which it does not touch")
                     } else {
                         format!("touches no other part; attached to the nearest part {p} by a fixed joint")
@@ -230,34 +253,20 @@ pub fn build_part_tree(
     (PartTree { root, parent, edges: tree_edges, contacts }, warnings)
 }
 
-/// A typical parent this close (in units of the contact test's plane distance) to a part that
-/// touches only its peers is taken as its mount ([`uncontacted_weight`]).
-const PEER_MOUNT_REACH: f32 = 2.0;
-
 /// The weight of a candidate edge `p → c` without contact. A typical parent of the child's label
 /// beats any other part, the nearest within each group (weights in (1, 2] and (0, 1] ×
 /// `FALLBACK_WEIGHT`). But a part that touches only its peers (parts of its own class: a fridge's
-/// lower door meeting its upper door edge to edge) is not mounted on them: a typical parent
-/// within [`PEER_MOUNT_REACH`] × the contact distance weighs as one barely touched
-/// (`label_prior`), so it wins over the peers (a scan may leave a seal's gap between a door and
-/// its body).
-fn uncontacted_weight(
-    p: &TreePart<'_>,
-    c: &TreePart<'_>,
-    parts: &[TreePart<'_>],
-    contacts: &BTreeMap<(PartId, PartId), PairContact>,
-    vocab: &Vocabulary,
-    cfg: &TreeConfig,
-) -> f64 {
+/// lower door meeting its upper door edge to edge: `touches_only_peers`) is not mounted on them: a
+/// typical parent within `peer_mount_reach` × the contact distance weighs as one barely touched
+/// (`label_prior`, the nearest first), so it wins over the peers (a scan may leave a seal's gap
+/// between a door and its body). With the label prior off (0) the rule is off too.
+fn uncontacted_weight(p: &TreePart<'_>, c: &TreePart<'_>, touches_only_peers: bool, vocab: &Vocabulary, cfg: &TreeConfig) -> f64 {
     let gap = primitive_gap(p.primitive, c.primitive);
     let typical = vocab.is_typical_parent(c.label, p.label);
-    let class = vocab.class_name(c.label);
-    let mut touching = parts.iter().filter(|q| q.id != c.id && contacts.contains_key(&(q.id, c.id))).peekable();
-    let touches_only_peers = class.is_some() && touching.peek().is_some() && touching.all(|q| vocab.class_name(q.label) == class);
-    if typical && touches_only_peers && gap <= PEER_MOUNT_REACH * cfg.contact.dist_max_m {
-        return f64::from(cfg.label_prior.max(0.0));
-    }
     let nearness = 1.0 / (1.0 + f64::from(gap));
+    if cfg.label_prior > 0.0 && typical && touches_only_peers && gap <= cfg.peer_mount_reach * cfg.contact.dist_max_m {
+        return f64::from(cfg.label_prior) + FALLBACK_WEIGHT * nearness;
+    }
     FALLBACK_WEIGHT * (f64::from(u8::from(typical)) + nearness)
 }
 
