@@ -8,7 +8,7 @@
 //! | drawer | prismatic | the parent's face normal the part sits on, outward | child centre | 0 .. `drawer_travel` × parent depth |
 //! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one; a lid's longer edge towards the parent's centre) | on that edge, at the door's back face | 0 .. `revolute_upper_rad` |
 //! | `sliding_panel` | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
-//! | knob | revolute | the outward face normal (or the round axis a test found) | knob centre | −π .. π |
+//! | knob | revolute | the outward face normal (or the round axis a test found; touching nothing, a disc's thin axis) | knob centre | −π .. π |
 //! | lever | revolute | the outward face normal | a bar (≥ `lever_min_elongation` × as long as wide across the axis): its end away from a grip on it, else the end nearer the parent's centre; otherwise, or through its mount, its centre | −π .. π |
 //! | rocker | revolute | the part's in-plane axis along its shorter side (a lever: the test's pivot line) | part centre (a lever: where it leaves its mount) | ± `rocker_tilt_rad` |
 //! | button | prismatic | into the parent (a round cap no taller than wide: along its own axis) | button centre | 0 .. `button_travel_m` |
@@ -160,7 +160,15 @@ pub fn estimate_joint(
             if let Some((axis, origin)) = spec.axis_line {
                 joint.axis_world = axis;
                 joint.origin_world = origin;
-            } else if spec.template == Template::Lever {
+            } else if spec.template == Template::Knob
+                && spec.mount_normal.is_none()
+                && let Some(axis) = disc_axis(child)
+            {
+                // Touching nothing, it shows no face it is mounted on: a dial turns about its
+                // own thin axis (pointing away from the parent's centre).
+                joint.axis_world = if axis.dot(child.center() - parent.center()) < 0.0 { -axis } else { axis };
+            }
+            if spec.axis_line.is_none() && spec.template == Template::Lever {
                 joint.origin_world = lever_pivot(parent, child, out, spec.handle, cfg.lever_min_elongation);
             }
             joint.lower = -std::f32::consts::PI;
@@ -238,6 +246,16 @@ fn lever_pivot(parent: &Primitive, lever: &Primitive, axis: Vec3, grip: Option<V
     let away_from = |p: Vec3| if (ends[0] - p).length() >= (ends[1] - p).length() { ends[0] } else { ends[1] };
     let nearer_to = |p: Vec3| if (ends[0] - p).length() <= (ends[1] - p).length() { ends[0] } else { ends[1] };
     grip.map_or_else(|| nearer_to(parent.center()), away_from)
+}
+
+/// The thin axis of a disc-shaped part: its smallest box extent at most 0.6× the next, and its
+/// face no more than twice as long as wide (a dial, not a bar).
+fn disc_axis(p: &Primitive) -> Option<Vec3> {
+    let axes = p.axes_world();
+    let mut order = [0_usize, 1, 2];
+    order.sort_by(|&a, &b| p.size[a].total_cmp(&p.size[b]));
+    let [thin, mid, long] = order.map(|k| p.size[k]);
+    (thin <= 0.6 * mid && long <= 2.0 * mid).then_some(axes[order[0]])
 }
 
 /// The axis a round part turns about: a cylinder's or capsule's own axis, else the box axis of
@@ -377,6 +395,20 @@ mod tests {
             (None, None) => {}
             _ => panic!("{got:?}, expected {expected:?} for {child:?} with handle {handle}"),
         }
+    }
+
+    #[test]
+    fn a_dial_touching_nothing_turns_about_its_own_thin_axis_not_towards_the_nearest_part() {
+        // The franka oven's first knob (regression: 90 degrees off): seen apart from the hood it
+        // sits on, hung off a small plate beside it; the plate's side is no mount face.
+        let plate = Primitive::cuboid_at(Vec3::new(-0.4, -0.035, 2.27), Vec3::new(0.078, 0.012, 0.054));
+        let dial = Primitive::cuboid_at(Vec3::new(-0.125, -0.065, 2.22), Vec3::new(0.09, 0.023, 0.08));
+        let cfg = KinematicsConfig::default();
+        let j = estimate_joint(1, &plate, 2, &dial, &spec(JointKind::Revolute, Template::Knob, None, None), &cfg);
+        assert!(j.axis_world.dot(Vec3::NEG_Y) > 0.99, "{}", j.axis_world);
+        // Mounted on a face it touches, that face decides.
+        let j = estimate_joint(1, &plate, 2, &dial, &spec(JointKind::Revolute, Template::Knob, None, Some(Vec3::X)), &cfg);
+        assert!(j.axis_world.dot(Vec3::X) > 0.99, "{}", j.axis_world);
     }
 
     #[test]
@@ -523,13 +555,13 @@ mod tests {
     fn a_knob_near_the_side_edge_turns_about_the_face_it_is_mounted_on() {
         // A knob on the front face at the body's +x edge, fitted 2 cm past it (a few points): by
         // position alone it lies farther out along +x than along the front normal (+y); the
-        // contact face decides.
+        // contact face decides, and without one its own thin axis does (a dial).
         let body = cabinet_body();
         let knob = Primitive::cuboid_at(Vec3::new(0.42, 0.2575, 0.9), Vec3::new(0.04, 0.015, 0.04));
         let cfg = KinematicsConfig::default();
         let guessed = estimate_joint(1, &body, 2, &knob, &spec(JointKind::Revolute, Template::Knob, None, None), &cfg);
         let mounted = estimate_joint(1, &body, 2, &knob, &spec(JointKind::Revolute, Template::Knob, None, Some(Vec3::Y)), &cfg);
-        assert!(guessed.axis_world.dot(Vec3::X) > 0.99, "position alone picks the side: {guessed:?}");
+        assert!(guessed.axis_world.dot(Vec3::Y) > 0.99, "the dial's own axis, not the side: {guessed:?}");
         assert!(mounted.axis_world.dot(Vec3::Y) > 0.999, "{mounted:?}");
         // A vertical mount normal does not turn a door into a lid.
         let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
