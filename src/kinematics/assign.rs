@@ -128,16 +128,25 @@ pub fn estimate_joint(
         Template::SlidingPanel => {
             // In its own plane, along the panel's box axis that points towards the parent's
             // centre: that is where the panel has room to go (a sliding door over half a front,
-            // a sash over the lower half of its frame); travel up to that gap.
+            // a sash over the lower half of its frame); travel up to that gap. The plane is the
+            // panel's own (its thinnest axis is its normal) where it is a panel: a sash touching
+            // no frame face has no mount normal to go by.
+            // A panel standing out of the face it is mounted on (a desk's sliding cover on its
+            // top) runs along that face: the in-plane axis across the mount normal.
+            let normal = panel_normal(child).unwrap_or(out);
             let towards = parent.center() - child.center();
-            let in_plane = towards - out * towards.dot(out);
+            let in_plane = towards - normal * towards.dot(normal);
             let axes = child.axes_world();
-            let axis = axes
-                .iter()
-                .filter(|a| a.dot(out).abs() < 0.5)
-                .max_by(|a, b| a.dot(in_plane).abs().total_cmp(&b.dot(in_plane).abs()))
-                .copied()
-                .unwrap_or(axes[0]);
+            let stands_out =
+                child.center().dot(out) + 0.5 * child.extent_along(out) > parent.center().dot(out) + 0.5 * parent.extent_along(out);
+            let along_mount = (stands_out && normal.dot(out).abs() < 0.5).then(|| normal.cross(out).normalize_or_zero());
+            let axis = along_mount.filter(|a| *a != Vec3::ZERO).unwrap_or_else(|| {
+                axes.iter()
+                    .filter(|a| a.dot(normal).abs() < 0.5)
+                    .max_by(|a, b| a.dot(in_plane).abs().total_cmp(&b.dot(in_plane).abs()))
+                    .copied()
+                    .unwrap_or(axes[0])
+            });
             let axis = if axis.dot(in_plane) < 0.0 { -axis } else { axis };
             joint.axis_world = axis;
             joint.upper = (2.0 * in_plane.dot(axis)).max(0.0).min(parent.extent_along(axis));
@@ -246,6 +255,14 @@ fn lever_pivot(parent: &Primitive, lever: &Primitive, axis: Vec3, grip: Option<V
     let away_from = |p: Vec3| if (ends[0] - p).length() >= (ends[1] - p).length() { ends[0] } else { ends[1] };
     let nearer_to = |p: Vec3| if (ends[0] - p).length() <= (ends[1] - p).length() { ends[0] } else { ends[1] };
     grip.map_or_else(|| nearer_to(parent.center()), away_from)
+}
+
+/// The normal of a panel: its thinnest box axis, where that extent is at most half the next.
+fn panel_normal(p: &Primitive) -> Option<Vec3> {
+    let axes = p.axes_world();
+    let mut order = [0_usize, 1, 2];
+    order.sort_by(|&a, &b| p.size[a].total_cmp(&p.size[b]));
+    (p.size[order[0]] <= 0.5 * p.size[order[1]]).then_some(axes[order[0]])
 }
 
 /// The thin axis of a disc-shaped part: its smallest box extent at most 0.6× the next, and its
@@ -395,6 +412,23 @@ mod tests {
             (None, None) => {}
             _ => panic!("{got:?}, expected {expected:?} for {child:?} with handle {handle}"),
         }
+    }
+
+    #[test]
+    fn a_sash_touching_no_frame_face_slides_in_its_own_plane() {
+        // Meta-World's window (regression: slid out of its plane, 90 degrees off): the sash in
+        // the lower half of a deep frame, touching none of its faces; it slides up.
+        let frame = Primitive::cuboid_at(Vec3::new(-0.002, -0.0135, 0.2405), Vec3::new(0.376, 0.121, 0.481));
+        let sash = Primitive::cuboid_at(Vec3::new(-0.004, 0.0085, 0.151), Vec3::new(0.29, 0.017, 0.2));
+        let cfg = KinematicsConfig::default();
+        let j = estimate_joint(1, &frame, 2, &sash, &spec(JointKind::Prismatic, Template::SlidingPanel, None, None), &cfg);
+        assert!(j.axis_world.dot(Vec3::Z) > 0.99, "{}", j.axis_world);
+        assert!(j.upper > 0.15, "{}", j.upper);
+        // CALVIN's desk: a sliding cover standing on the desk's top runs along the top.
+        let desk = Primitive::cuboid_at(Vec3::new(0.001, 0.04, 0.402), Vec3::new(1.058, 0.413, 0.804));
+        let cover = Primitive::cuboid_at(Vec3::new(0.05, 0.084, 0.69), Vec3::new(0.355, 0.074, 0.278));
+        let j = estimate_joint(1, &desk, 2, &cover, &spec(JointKind::Prismatic, Template::SlidingPanel, None, None), &cfg);
+        assert!(j.axis_world.dot(Vec3::X).abs() > 0.99, "{}", j.axis_world);
     }
 
     #[test]
