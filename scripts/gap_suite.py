@@ -1198,25 +1198,45 @@ def run_case(case, seed, out):
     sim = make_sim(case, engine_mech, case.effects)
     traj = simulate(sim, steps, q0, source, pose_links)
     sim.close()
-    table, noise = recording_table(case, traj, rng)
+    head = {
+        "format": TRUTH_FORMAT, "engine": ENGINES[case.engine], "case": case.name, "description": case.description,
+        "effects": truth_effects(case, engine_mech), "joints": names, "engine_detail": engine_text(case),
+    }
+    return write_case(out, case, urdf, head, CaseRun(seed, traj, steps, q0, engine_mech, nominal), rng)
+
+
+@dataclass
+class CaseRun:
+    """What a simulated object case leaves for write_case."""
+
+    seed: int
+    traj: object
+    steps: object
+    q0: object
+    engine_mech: object
+    nominal: object
+
+
+def write_case(out, case, urdf, head, run, rng):
+    """Writes DIR/<case>/{model.urdf, recording.csv, truth.json}: truth.json is `head` (format, engine, case,
+    description, effects, joints, engine_detail) and what every engine's case says alike; the summary line."""
+    table, noise = recording_table(case, run.traj, rng)
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
         f.write(urdf)
-    meta = {"model": "model.urdf"} if case.model_line else {}
-    write_csv(os.path.join(folder, "recording.csv"), table, meta)
+    write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf"} if case.model_line else {})
     truth = {
-        "format": TRUTH_FORMAT, "engine": ENGINES[case.engine], "case": case.name, "description": case.description,
-        "effects": truth_effects(case, engine_mech), "joints": names, "engine_detail": engine_text(case),
-        "seed": seed, "duration_s": case.duration, "rate_hz": case.rate, "timestep_s": DT,
+        **head,
+        "seed": run.seed, "duration_s": case.duration, "rate_hz": case.rate, "timestep_s": DT,
         "sampling": "jittered (each sample moved by up to +-(period-1)/2 engine steps)" if case.jitter else "uniform",
         "observed": "link poses" if case.observe == "pose" else "joint positions", "excitation": excitation_text(case),
         "noise": noise, "dropouts": case.dropouts,
-        "visibility_rmse": replay_visibility(case, traj, steps, q0) if case.effects else {},
-        "visibility_effort_share": effort_share(case, traj, engine_mech, nominal) if case.effects else {},
+        "visibility_rmse": replay_visibility(case, run.traj, run.steps, run.q0) if case.effects else {},
+        "visibility_effort_share": effort_share(case, run.traj, run.engine_mech, run.nominal) if case.effects else {},
     }
     write_json(os.path.join(folder, "truth.json"), truth)
-    return summary_line(case, traj, truth)
+    return summary_line(case, run.traj, truth)
 
 
 def summary_line(case, traj, truth):

@@ -72,11 +72,10 @@ import sapien
 import sapien.physx as physx
 
 import gap_suite as gs
-from gap_suite import (DT, GRAVITY, TRUTH_FORMAT, Case, MujocoSim, SuiteError, case_rng, check_case_folder, compare_dynamics,
-                       door, double_pendulum, drawer, effort_share, engine_mechanism, excitation_text, fx, joint_params, lid,
-                       make_source, measure_restitution, mujoco_model, pendulum, push, quat_from_rpy, recording_table,
-                       replay_visibility, sash, sample_steps, simulate, sines, summary_line, tree_order, unit, urdf_text,
-                       write_csv, write_json)
+from gap_suite import (DT, GRAVITY, TRUTH_FORMAT, Case, MujocoSim, SuiteError, case_rng, check_case_folder,
+                       compare_dynamics, door, double_pendulum, drawer, engine_mechanism, fx, joint_params, lid,
+                       make_source, measure_restitution, mujoco_model, pendulum, push, quat_from_rpy, sash,
+                       sample_steps, simulate, sines, tree_order, unit, urdf_text)
 
 ENGINE = f"sapien {sapien.__version__} (PhysX {physx.version()})"
 PHYSX_RTOL = 2e-5  # inertia and bias against MuJoCo, relative to the largest entry (PhysX computes in float32)
@@ -398,26 +397,13 @@ def run_case(case, seed, out):
     sim = PhysxSim(engine_mech, case.effects)
     traj = simulate(sim, steps, q0, source, pose_links)
     sim.close()
-    table, noise = recording_table(case, traj, rng)
-    folder = os.path.join(out, case.name)
-    os.makedirs(folder, exist_ok=True)
-    with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
-        f.write(urdf)
-    write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf"} if case.model_line else {})
-    truth = {
+    head = {
         "format": TRUTH_FORMAT, "engine": ENGINE, "case": case.name, "description": case.description,
         "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params,
                      "engine_detail": effect_detail(case, e, engine_mech, measured)} for e in case.effects],
         "joints": names, "engine_detail": engine_text(rigid_err),
-        "seed": seed, "duration_s": case.duration, "rate_hz": case.rate, "timestep_s": DT,
-        "sampling": "jittered (each sample moved by up to +-(period-1)/2 engine steps)" if case.jitter else "uniform",
-        "observed": "link poses" if case.observe == "pose" else "joint positions", "excitation": excitation_text(case),
-        "noise": noise, "dropouts": case.dropouts,
-        "visibility_rmse": replay_visibility(case, traj, steps, q0) if case.effects else {},
-        "visibility_effort_share": effort_share(case, traj, engine_mech, nominal) if case.effects else {},
     }
-    write_json(os.path.join(folder, "truth.json"), truth)
-    return summary_line(case, traj, truth)
+    return gs.write_case(out, case, urdf, head, gs.CaseRun(seed, traj, steps, q0, engine_mech, nominal), rng)
 
 
 def main():
