@@ -19,7 +19,9 @@
 //! - `grip_set_into_factor` divides the contact of a grip (handle, pull) with a part when the grip
 //!   also touches a part set into that one (whose box lies inside its box): a drawer front flush
 //!   with the cabinet's front lies inside the box fitted to the cabinet, so the handle's back touches
-//!   both front faces, but it is mounted on the drawer — the part it moves.
+//!   both front faces, but it is mounted on the drawer — the part it moves. Two parts that each
+//!   carry a grip (stacked drawers) touch, but each is moved by its own grip and neither is mounted
+//!   on the other: their contact counts as none.
 //!
 //! A part with no contact at all is attached by a fallback edge far lighter than any contact, and
 //! reported: to a typical parent of its label when the object has one (the headboard of a bed whose
@@ -180,6 +182,7 @@ pub fn build_part_tree(
         })
         .map(|c| c.id)
         .collect();
+    let carriers = grip_carriers(parts, &contacts, vocab, cfg);
     let mut forced: BTreeMap<usize, usize> = BTreeMap::new();
     for (child, parent) in forced_parent {
         match (index.get(child), index.get(parent)) {
@@ -208,6 +211,11 @@ pub fn build_part_tree(
                 Some(pc) if vocab.is_typical_parent(c.label, p.label) => f64::from(pc.weight + cfg.label_prior.max(0.0)),
                 Some(pc) if vocab.is_grip(c.label) && grip_touches_a_part_set_into(c, p, parts, &contacts, cfg.contact.dist_max_m) => {
                     f64::from(pc.weight / cfg.grip_set_into_factor.max(1.0))
+                }
+                // Two parts each moved by its own grip (stacked drawers) touch, but neither is
+                // mounted on the other: their contact counts as none.
+                Some(_) if carriers.contains(&p.id) && carriers.contains(&c.id) => {
+                    uncontacted_weight(p, c, only_peers.contains(&c.id), vocab, cfg)
                 }
                 Some(pc) => f64::from(pc.weight),
                 None => uncontacted_weight(p, c, only_peers.contains(&c.id), vocab, cfg),
@@ -268,6 +276,33 @@ fn uncontacted_weight(p: &TreePart<'_>, c: &TreePart<'_>, touches_only_peers: bo
         return f64::from(cfg.label_prior) + FALLBACK_WEIGHT * nearness;
     }
     FALLBACK_WEIGHT * (f64::from(u8::from(typical)) + nearness)
+}
+
+/// The parts that carry a grip: for each grip-labelled part, the part it touches most, a part
+/// with a part set into it that the grip also touches counting `grip_set_into_factor` less (as in
+/// the tree's weights); ties to the smaller id.
+fn grip_carriers(
+    parts: &[TreePart<'_>],
+    contacts: &BTreeMap<(PartId, PartId), PairContact>,
+    vocab: &Vocabulary,
+    cfg: &TreeConfig,
+) -> std::collections::BTreeSet<PartId> {
+    parts
+        .iter()
+        .filter(|g| vocab.is_grip(g.label))
+        .filter_map(|g| {
+            parts
+                .iter()
+                .filter(|q| q.id != g.id && !vocab.is_grip(q.label))
+                .filter_map(|q| {
+                    let w = contacts.get(&(q.id, g.id))?.weight;
+                    let set_into = grip_touches_a_part_set_into(g, q, parts, contacts, cfg.contact.dist_max_m);
+                    Some((if set_into { w / cfg.grip_set_into_factor.max(1.0) } else { w }, q.id))
+                })
+                .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)))
+                .map(|(_, id)| id)
+        })
+        .collect()
 }
 
 /// Whether `grip` (a grip-labelled part) also touches another part whose box lies inside
@@ -359,6 +394,32 @@ mod tests {
         assert_eq!(tree.parent.get(&2), Some(&1), "{:?}", tree.parent);
         // A part that is not a grip keeps its contact weights (the drawer itself, under the body).
         assert!(lies_within(&drawer, &body, 0.0) && !lies_within(&body, &drawer, 0.03));
+    }
+
+    #[test]
+    fn a_drawer_stacked_under_another_hangs_off_the_cabinet_not_the_drawer_above() {
+        // LIBERO's wooden cabinet, partial scan (regression: the middle drawer hung off the top
+        // one, which it touches more than the cabinet's box, so its grip was not at its parent's
+        // front and it was made fixed). Drawers named by position, each with its handle.
+        let bounds = |lo: [f32; 3], hi: [f32; 3]| {
+            let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+            Primitive::cuboid_at(0.5 * (lo + hi), hi - lo)
+        };
+        let prims = [
+            bounds([-0.121, -0.082, 0.0], [0.12, 0.111, 0.22]),
+            bounds([-0.122, -0.079, 0.129], [0.122, 0.111, 0.22]),
+            bounds([-0.055, -0.106, 0.172], [0.036, -0.079, 0.189]),
+            bounds([-0.122, -0.079, 0.046], [0.12, 0.097, 0.129]),
+            bounds([-0.052, -0.112, 0.083], [0.039, -0.079, 0.1]),
+            bounds([-0.122, -0.079, 0.0], [0.12, 0.073, 0.076]),
+            bounds([-0.044, -0.109, 0.027], [0.041, -0.079, 0.045]),
+        ];
+        let labels = ["base", "top", "handle", "cabinet", "handle", "cabinet", "handle"];
+        let view: Vec<TreePart<'_>> =
+            prims.iter().zip(labels).zip(1..).map(|((primitive, label), id)| TreePart { id, label, primitive }).collect();
+        let (tree, _) = build_part_tree(&view, &TreeConfig::default(), &Vocabulary::builtin(), &BTreeMap::new());
+        let parents: Vec<Option<&PartId>> = (2..=7).map(|c| tree.parent.get(&c)).collect();
+        assert_eq!(parents, [Some(&1), Some(&2), Some(&1), Some(&4), Some(&1), Some(&6)], "{:?}", tree.parent);
     }
 
     #[test]
