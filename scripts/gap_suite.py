@@ -54,7 +54,10 @@ joint torques (computed torque with model.urdf around a slow moving target insid
 sums of sines, decided at 200 Hz and held), 10 s at 1 ms steps, q noise 1e-4 rad, effort noise 1 %
 of each joint's RMS; frictionloss/damping/armature are added on chosen joints. The model's own
 damping goes into the URDF's <dynamics>; its own armature and frictionloss (which the URDF does not
-carry) are listed in the truth, merged with what was added.
+carry) are listed in the truth, merged with what was added. Two arm cases are recorded as a real arm
+is analysed, against a published identified model: their model.urdf (written after the check above)
+has every link's mass, centre of mass and inertia drawn up to 5 % off the engine's, and torque-sensor
+biases (effort_offset) are added to the recorded efforts; the controller knows only model.urdf.
 """
 
 import argparse
@@ -64,6 +67,7 @@ import json
 import math
 import os
 import re
+import sys
 import tempfile
 import time
 import xml.etree.ElementTree as ET
@@ -1399,12 +1403,16 @@ ARMS = {
 @dataclass
 class ArmCase:
     """Added on joints: [(joint, kind, value)], kind coulomb_friction (MuJoCo frictionloss),
-    viscous_damping (damping) or armature."""
+    viscous_damping (damping), armature or effort_offset (a bias of the recorded torque).
+    `model_error`: model.urdf's inertial parameters as a published identification has them, not
+    as the engine does: each link's mass, centre of mass and inertia drawn off the engine's by up to
+    this share (seeded), as a real robot's identified model is off its true rigid bodies."""
 
     name: str
     arm: str
     description: str
     added: list
+    model_error: float = 0.0
 
 
 ARM_CASES = [
@@ -1422,6 +1430,19 @@ ARM_CASES = [
     ArmCase("arm_ur5e_mixed", "ur5e", "UR5e; damping on the pan, more armature on wrist 2, dry friction at the elbow", [
         ("shoulder_pan_joint", "viscous_damping", 1.5), ("wrist_2_joint", "armature", 0.1),
         ("elbow_joint", "coulomb_friction", 1.0)]),
+    # As a real torque-sensed arm is recorded against its published model: friction on six of
+    # seven joints at the levels published for such an arm, two sensor biases, and a model.urdf
+    # whose inertial parameters are up to 5 % off the engine's.
+    ArmCase("arm_panda_identified_model", "panda",
+            "Panda against a model.urdf with identification errors (masses, centres of mass, inertias up to 5 % off); "
+            "dry friction on joints 1-6, damping on 4, torque-sensor biases on 2 and 5", [
+                ("joint1", "coulomb_friction", 0.3), ("joint2", "coulomb_friction", 0.45), ("joint3", "coulomb_friction", 0.3),
+                ("joint4", "coulomb_friction", 0.6), ("joint5", "coulomb_friction", 0.4), ("joint6", "coulomb_friction", 0.15),
+                ("joint4", "viscous_damping", 0.5), ("joint2", "effort_offset", 0.3), ("joint5", "effort_offset", -0.15)],
+            model_error=0.05),
+    ArmCase("arm_ur5e_identified_model_none", "ur5e",
+            "UR5e against a model.urdf with identification errors (up to 5 % off); NO added effect "
+            "(only the model's own armature)", [], model_error=0.05),
 ]
 
 
@@ -1564,6 +1585,10 @@ def arm_effects(case, defaults):
                     detail = (f"MuJoCo joint damping: added {added[kind]:g} on top of the model's own {own['damping']:g}, "
                               "which model.urdf's <dynamics> has")
                 out.append(Effect(name, kind, {param: round(total, 9)}, detail=detail))
+        offset = sum(v for j, k, v in case.added if j == name and k == "effort_offset")
+        if offset != 0.0:
+            out.append(Effect(name, "effort_offset", {"offset": offset},
+                              detail=f"a constant {offset:g} added to the recorded effort (torque-sensor bias)"))
     return out
 
 
@@ -1574,8 +1599,33 @@ def add_arm_effects(spec, case):
             joint.frictionloss += value
         elif kind == "viscous_damping":
             joint.damping = [joint.damping[0] + value, *joint.damping[1:]]
-        else:
+        elif kind == "armature":
             joint.armature += value
+
+
+def arm_offsets(case, names):
+    """The torque sensors' biases: a constant added to each recorded effort."""
+    return np.array([sum(v for j, k, v in case.added if j == n and k == "effort_offset") for n in names])
+
+
+def identification_error(mech, share, rng):
+    """`mech` with every moving link's mass, centre of mass and inertia drawn off by up to `share`:
+    mass x (1 +- share), the centre of mass moved by up to `share` of its distance from the joint
+    (at least 2 mm x share/0.05), the principal inertias x (1 +- share) about the same axes."""
+    out = copy.deepcopy(mech)
+    for link in out.links:
+        if link.mass <= 0.0:
+            continue
+        link.mass *= 1.0 + rng.uniform(-share, share)
+        com = np.asarray(link.com, float)
+        reach = max(float(np.linalg.norm(com)), 0.04)
+        link.com = tuple(com + rng.uniform(-1.0, 1.0, 3) * share * reach)
+        vals, vecs = np.linalg.eigh(np.asarray(link.inertia, float))
+        vals = vals * (1.0 + rng.uniform(-share, share, 3))
+        # A physical inertia: each principal moment no larger than the other two together.
+        vals = np.minimum(vals, np.array([vals[1] + vals[2], vals[0] + vals[2], vals[0] + vals[1]]))
+        link.inertia = vecs @ np.diag(vals) @ vecs.T
+    return out
 
 
 def run_arm_case(case, seed, out, mode):
@@ -1589,10 +1639,17 @@ def run_arm_case(case, seed, out, mode):
     names = [rigid.joint(j).name for j in range(rigid.njnt)]
     defaults = arm_defaults(rigid, names)
     rigid.dof_armature[:] = 0.0
-    urdf = urdf_text(arm_mechanism(rigid, case.arm, defaults), f"rigid-body tree of {origin}, compiled by MuJoCo "
-                     f"{mujoco.__version__}; no geometry")
+    mech = arm_mechanism(rigid, case.arm, defaults)
+    urdf = urdf_text(mech, f"rigid-body tree of {origin}, compiled by MuJoCo {mujoco.__version__}; no geometry")
     nominal = MujocoSim(mujoco.MjSpec.from_string(urdf).compile(), names)
     lo, hi = verify_arm_urdf(rigid, nominal, names, rng)
+    if case.model_error > 0.0:
+        # Verified as the engine has it, then written as an identification would have it.
+        urdf = urdf_text(identification_error(mech, case.model_error, rng),
+                         f"rigid-body tree of {origin}, compiled by MuJoCo {mujoco.__version__}, inertial parameters "
+                         f"drawn up to {case.model_error:.0%} off the engine's (an identified model); no geometry")
+        nominal.close()
+        nominal = MujocoSim(mujoco.MjSpec.from_string(urdf).compile(), names)
     add_arm_effects(spec, case)
     plant = MujocoSim(spec.compile(), names)
     armature = np.array([defaults[n]["armature"] for n in names])
@@ -1601,7 +1658,9 @@ def run_arm_case(case, seed, out, mode):
     table = {"time": traj.t}
     table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(names)})
     effort_sigma = {n: 0.01 * rms(traj.effort[:, i]) for i, n in enumerate(names)}
-    table.update({f"{n}.effort": traj.effort[:, i] + rng.normal(0.0, effort_sigma[n], len(traj.t)) for i, n in enumerate(names)})
+    bias = arm_offsets(case, names)
+    table.update({f"{n}.effort": traj.effort[:, i] + bias[i] + rng.normal(0.0, effort_sigma[n], len(traj.t))
+                  for i, n in enumerate(names)})
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
@@ -1640,6 +1699,28 @@ class ArmRun:
 
 
 # ---------------------------------------------------------------- main
+
+
+def engine_suite_main(cases, run_case, checks=()):
+    """The command line of an engine's suite of its own (gap_suite_physx.py, gap_suite_dart.py):
+    --out, --seed, --only over `cases()`; each (kind, check) in `checks` runs once before the cases
+    when a chosen case has an effect of that kind; `run_case(case, seed, out)` writes a case."""
+    parser = argparse.ArgumentParser(description=sys.modules["__main__"].__doc__.split("\n\n")[0])
+    parser.add_argument("--out", required=True, help="folder to write DIR/<case>/ into")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--only", default="*", help="fnmatch pattern on case names")
+    args = parser.parse_args()
+    start = time.perf_counter()
+    chosen = [c for c in cases() if fnmatch.fnmatch(c.name, args.only)]
+    if not chosen:
+        raise SystemExit(f"no case matches {args.only!r}")
+    for kind, check in checks:
+        if any(e.kind == kind for c in chosen for e in c.effects):
+            check()
+    for case in chosen:
+        print(run_case(case, args.seed, args.out), flush=True)
+    rows = sum(check_case_folder(os.path.join(args.out, case.name)) for case in chosen)
+    print(f"{len(chosen)} cases, {rows} samples, written and parsed in {time.perf_counter() - start:.1f} s")
 
 
 def parse_args():

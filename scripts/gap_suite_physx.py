@@ -60,11 +60,7 @@ default_rng([seed, crc32(name)])):
                                     pose; jittered sample times, dropouts
 """
 
-import argparse
-import fnmatch
 import math
-import os
-import time
 
 import mujoco
 import numpy as np
@@ -72,7 +68,7 @@ import sapien
 import sapien.physx as physx
 
 import gap_suite as gs
-from gap_suite import (DT, GRAVITY, TRUTH_FORMAT, Case, MujocoSim, SuiteError, case_rng, check_case_folder,
+from gap_suite import (DT, GRAVITY, TRUTH_FORMAT, Case, MujocoSim, SuiteError, case_rng,
                        compare_dynamics, door, double_pendulum, drawer, engine_mechanism, fx, joint_params, lid,
                        make_source, measure_restitution, mujoco_model, pendulum, push, quat_from_rpy, sash,
                        sample_steps, simulate, sines, tree_order, unit, urdf_text)
@@ -407,21 +403,7 @@ def run_case(case, seed, out):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--out", required=True, help="folder to write DIR/<case>/ into")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--only", default="*", help="fnmatch pattern on case names")
-    args = parser.parse_args()
-    start = time.perf_counter()
-    chosen = [c for c in cases() if fnmatch.fnmatch(c.name, args.only)]
-    if not chosen:
-        raise SystemExit(f"no case matches {args.only!r}")
-    if any(e.kind == "viscous_damping" for c in chosen for e in c.effects):
-        check_drive_damping()
-    for case in chosen:
-        print(run_case(case, args.seed, args.out), flush=True)
-    rows = sum(check_case_folder(os.path.join(args.out, case.name)) for case in chosen)
-    print(f"{len(chosen)} cases, {rows} samples, written and parsed in {time.perf_counter() - start:.1f} s")
+    gs.engine_suite_main(cases, run_case, [("viscous_damping", check_drive_damping)])
 
 
 if __name__ == "__main__":

@@ -35,6 +35,14 @@ pub enum EffectKind {
 }
 
 impl EffectKind {
+    /// Whether the effort of this kind depends on the joint's position alone (an offset, a
+    /// spring, gravity along a tilted axis): the shape an error of the model's weights and centres
+    /// of mass takes.
+    #[must_use]
+    pub fn depends_on_position_alone(self) -> bool {
+        matches!(self, Self::EffortOffset | Self::Spring | Self::GravityTilt)
+    }
+
     /// Every fittable kind, in a fixed order (ties in selection go to the earlier one).
     pub const FITTABLE: [Self; 7] =
         [Self::ViscousDamping, Self::CoulombFriction, Self::Spring, Self::GravityTilt, Self::EndStop, Self::MassScale, Self::SoftClose];

@@ -404,7 +404,9 @@ fn joint_outcome(
     let position_residual: Vec<f64> = y.iter().zip(replays.before).map(|(a, b)| a - b).collect();
     let mismatches: Vec<Mismatch> =
         spans.iter().map(|s| effort_mismatch(rec, joint, y, &f.residual_before, &position_residual, *s, force)).collect();
-    if f.cv_rms_after > rules.unknown_share * f.effort_rms {
+    // Unexplained beyond the joint's own effort and beyond what the model's weights and centres
+    // of mass can be trusted to (SelectionRules::min_static_load_share).
+    if f.cv_rms_after > rules.unknown_share * f.effort_rms && f.cv_rms_after > rules.min_static_load_share * f.gravity_rms {
         let left = mismatch_spans(&f.residual_after, floor.min(rules.unknown_share * f.effort_rms), cfg.min_mismatch_samples);
         let at: Vec<String> = left.iter().take(4).map(|s| format!("{:.2}–{:.2} s", rec.time_s[s.start], rec.time_s[s.end])).collect();
         let share = f.cv_rms_after / f.effort_rms.max(1e-12);
