@@ -70,10 +70,8 @@ import mujoco
 import numpy as np
 
 import gap_suite as gs
-from gap_suite import (DT, GRAVITY, TRUTH_FORMAT, Case, MujocoSim, SuiteError, case_rng,
-                       compare_dynamics, door, double_pendulum, drawer, engine_mechanism, fx, joint_params, lid,
-                       make_source, measure_restitution, mujoco_model, push, sample_steps, sash, simulate, sines,
-                       urdf_text)
+from gap_suite import (DT, GRAVITY, Case, MujocoSim, SuiteError, compare_dynamics, door, double_pendulum, drawer, fx,
+                       joint_params, lid, measure_restitution, mujoco_model, push, sash, sines, urdf_text)
 
 ENGINE = f"dart {dartpy.__version__}"
 DART_RTOL = 1e-9  # inertia and bias against MuJoCo, relative to the largest entry (both compute in double)
@@ -427,30 +425,8 @@ def engine_text(rigid_err):
 
 def run_case(case, seed, out):
     """Simulates one case with DART and writes DIR/<case>/{model.urdf, recording.csv, truth.json}."""
-    rng = case_rng(seed, case.name)
-    names = case.mech.movable()
-    urdf = urdf_text(case.mech)
-    nominal = MujocoSim(mujoco.MjSpec.from_string(urdf).compile(), names)
-    engine_mech = engine_mechanism(case.mech, case.effects)
-    rigid_err = check_rigid(case, engine_mech, nominal, rng)
-    measured = measure_effects(case, engine_mech, rng)
-    for effect in case.effects:
-        if effect.kind == "end_stop":
-            effect.params["restitution"] = measure_restitution(case, engine_mech, effect)
-    q0 = np.array([case.q0.get(name, 0.0) for name in names])
-    steps = sample_steps(case.duration, case.rate, case.jitter, rng)
-    source = make_source(case, nominal, q0, rng)
-    pose_links = [case.mech.joint(name).child for name in names] if case.observe == "pose" else []
-    sim = DartSim(engine_mech, case.effects, model=case.mech)
-    traj = simulate(sim, steps, q0, source, pose_links)
-    sim.close()
-    head = {
-        "format": TRUTH_FORMAT, "engine": ENGINE, "case": case.name, "description": case.description,
-        "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params,
-                     "engine_detail": effect_detail(case, e, engine_mech, measured)} for e in case.effects],
-        "joints": names, "engine_detail": engine_text(rigid_err),
-    }
-    return gs.write_case(out, case, urdf, head, gs.CaseRun(seed, traj, steps, q0, engine_mech, nominal), rng)
+    return gs.run_engine_case(case, seed, out, ENGINE, (check_rigid, measure_effects, effect_detail, engine_text),
+                              lambda engine_mech: DartSim(engine_mech, case.effects, model=case.mech))
 
 
 def main():
