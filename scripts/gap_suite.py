@@ -1179,19 +1179,30 @@ def engine_text(case):
             "joint-limit constraint")
 
 
-def truth_effects(case, engine_mech):
-    return [{"joint": e.joint, "kind": e.kind, "params": e.params, "engine_detail": effect_detail(case, e, engine_mech)}
-            for e in case.effects]
-
-
 def run_case(case, seed, out):
-    """Simulates one case and writes DIR/<case>/{model.urdf, recording.csv, truth.json}."""
+    """Simulates one case with MuJoCo or Bullet and writes DIR/<case>/ (run_engine_case)."""
+    checks = (lambda case, engine_mech, nominal, rng: check_rigid(case, nominal, rng),
+              lambda case, engine_mech, rng: None,
+              lambda case, effect, engine_mech, measured: effect_detail(case, effect, engine_mech),
+              lambda rigid_err: engine_text(case))
+    return run_engine_case(case, seed, out, ENGINES[case.engine], checks,
+                           lambda engine_mech: make_sim(case, engine_mech, case.effects))
+
+
+def run_engine_case(case, seed, out, engine, checks, make_sim):
+    """Simulates one case with an engine and writes DIR/<case>/{model.urdf, recording.csv, truth.json}
+    (this suite's engines and those of gap_suite_physx.py, gap_suite_dart.py): `checks` holds the engine's
+    check_rigid(case, engine_mech, nominal, rng), measure_effects(case, engine_mech, rng),
+    effect_detail(case, effect, engine_mech, measured) and engine_text(rigid_err); `make_sim(engine_mech)`
+    builds the engine's simulation of the case."""
+    check_rigid, measure_effects, effect_detail, engine_text = checks
     rng = case_rng(seed, case.name)
     names = case.mech.movable()
     urdf = urdf_text(case.mech)
     nominal = MujocoSim(mujoco.MjSpec.from_string(urdf).compile(), names)
-    check_rigid(case, nominal, rng)
     engine_mech = engine_mechanism(case.mech, case.effects)
+    rigid_err = check_rigid(case, engine_mech, nominal, rng)
+    measured = measure_effects(case, engine_mech, rng)
     for effect in case.effects:
         if effect.kind == "end_stop":
             effect.params["restitution"] = measure_restitution(case, engine_mech, effect)
@@ -1199,12 +1210,14 @@ def run_case(case, seed, out):
     steps = sample_steps(case.duration, case.rate, case.jitter, rng)
     source = make_source(case, nominal, q0, rng)
     pose_links = [case.mech.joint(name).child for name in names] if case.observe == "pose" else []
-    sim = make_sim(case, engine_mech, case.effects)
+    sim = make_sim(engine_mech)
     traj = simulate(sim, steps, q0, source, pose_links)
     sim.close()
     head = {
-        "format": TRUTH_FORMAT, "engine": ENGINES[case.engine], "case": case.name, "description": case.description,
-        "effects": truth_effects(case, engine_mech), "joints": names, "engine_detail": engine_text(case),
+        "format": TRUTH_FORMAT, "engine": engine, "case": case.name, "description": case.description,
+        "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params,
+                     "engine_detail": effect_detail(case, e, engine_mech, measured)} for e in case.effects],
+        "joints": names, "engine_detail": engine_text(rigid_err),
     }
     return write_case(out, case, urdf, head, CaseRun(seed, traj, steps, q0, engine_mech, nominal), rng)
 
@@ -1699,38 +1712,6 @@ class ArmRun:
 
 
 # ---------------------------------------------------------------- main
-
-
-def run_engine_case(case, seed, out, engine, checks, make_sim):
-    """One case of an engine's suite of its own, written to DIR/<case>/: `checks` holds the engine's
-    check_rigid(case, engine_mech, nominal, rng), measure_effects(case, engine_mech, rng),
-    effect_detail(case, effect, engine_mech, measured) and engine_text(rigid_err); `make_sim(engine_mech)`
-    builds the engine's simulation of the case."""
-    check_rigid, measure_effects, effect_detail, engine_text = checks
-    rng = case_rng(seed, case.name)
-    names = case.mech.movable()
-    urdf = urdf_text(case.mech)
-    nominal = MujocoSim(mujoco.MjSpec.from_string(urdf).compile(), names)
-    engine_mech = engine_mechanism(case.mech, case.effects)
-    rigid_err = check_rigid(case, engine_mech, nominal, rng)
-    measured = measure_effects(case, engine_mech, rng)
-    for effect in case.effects:
-        if effect.kind == "end_stop":
-            effect.params["restitution"] = measure_restitution(case, engine_mech, effect)
-    q0 = np.array([case.q0.get(name, 0.0) for name in names])
-    steps = sample_steps(case.duration, case.rate, case.jitter, rng)
-    source = make_source(case, nominal, q0, rng)
-    pose_links = [case.mech.joint(name).child for name in names] if case.observe == "pose" else []
-    sim = make_sim(engine_mech)
-    traj = simulate(sim, steps, q0, source, pose_links)
-    sim.close()
-    head = {
-        "format": TRUTH_FORMAT, "engine": engine, "case": case.name, "description": case.description,
-        "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params,
-                     "engine_detail": effect_detail(case, e, engine_mech, measured)} for e in case.effects],
-        "joints": names, "engine_detail": engine_text(rigid_err),
-    }
-    return write_case(out, case, urdf, head, CaseRun(seed, traj, steps, q0, engine_mech, nominal), rng)
 
 
 def engine_suite_main(cases, run_case, checks=()):
