@@ -987,6 +987,7 @@ impl EffortProblem<'_> {
             let weak: Vec<usize> = chosen
                 .iter()
                 .copied()
+                .filter(|&c| self.candidates[c].kind.depends_on_position_alone())
                 .filter(|&c| {
                     let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
                     let v = self.verdict(&self.evaluate(&rest), &fitted, &self.rows_of(c), c, None);
@@ -1136,8 +1137,7 @@ impl EffortProblem<'_> {
         let mut any = false;
         loop {
             // A term that is not material (too small, not physical) goes before one that only
-            // fails on held-out data: the immaterial one may be what masks the other (a spring
-            // standing in for a weight error beside a joint's friction).
+            // fails on held-out data: the immaterial one may be what masks the other.
             let mut failing: Option<(bool, Vec<usize>, Evaluation)> = None;
             for idx in 0..chosen.len() {
                 let rest: Vec<usize> = chosen.iter().copied().enumerate().filter(|&(k, _)| k != idx).map(|(_, c)| c).collect();
