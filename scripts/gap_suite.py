@@ -1582,12 +1582,16 @@ def arm_excitation(nominal, armature, home, lo, hi, rng):
     return target(0.0)[0], effort
 
 
+def added_level(case, joint, kind):
+    """What the arm case adds of one kind on one joint (0 where nothing)."""
+    return sum(v for j, k, v in case.added if j == joint and k == kind)
+
+
 def arm_effects(case, defaults):
     """Truth effects: added ones, with the model's own armature/frictionloss (not in the URDF) merged."""
     out = []
     for name, own in defaults.items():
-        added = {kind: sum(v for j, k, v in case.added if j == name and k == kind)
-                 for kind in ("armature", "coulomb_friction", "viscous_damping")}
+        added = {kind: added_level(case, name, kind) for kind in ("armature", "coulomb_friction", "viscous_damping")}
         for kind, param, mine, engine in (("armature", "armature", own["armature"], "armature"),
                                           ("coulomb_friction", "friction", own["friction"], "frictionloss"),
                                           ("viscous_damping", "damping", 0.0, "damping")):
@@ -1598,7 +1602,7 @@ def arm_effects(case, defaults):
                     detail = (f"MuJoCo joint damping: added {added[kind]:g} on top of the model's own {own['damping']:g}, "
                               "which model.urdf's <dynamics> has")
                 out.append(Effect(name, kind, {param: round(total, 9)}, detail=detail))
-        offset = sum(v for j, k, v in case.added if j == name and k == "effort_offset")
+        offset = added_level(case, name, "effort_offset")
         if offset != 0.0:
             out.append(Effect(name, "effort_offset", {"offset": offset},
                               detail=f"a constant {offset:g} added to the recorded effort (torque-sensor bias)"))
@@ -1618,7 +1622,7 @@ def add_arm_effects(spec, case):
 
 def arm_offsets(case, names):
     """The torque sensors' biases: a constant added to each recorded effort."""
-    return np.array([sum(v for j, k, v in case.added if j == n and k == "effort_offset") for n in names])
+    return np.array([added_level(case, n, "effort_offset") for n in names])
 
 
 def identification_error(mech, share, rng):
