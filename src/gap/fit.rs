@@ -73,6 +73,21 @@ impl<'a> Problem<'a> {
         Self { input, y, sigma: sigma.max(1e-9), joint, segments, rows }
     }
 
+    /// One segment per span of `spans` (in order, disjoint), over its finite samples; a span
+    /// with fewer than 2 of them is left out.
+    #[must_use]
+    pub fn with_spans(input: SimInput<'a>, y: &'a [f64], spans: &[Span], sigma: f64, joint: &'a GapJoint) -> Self {
+        let (mut segments, mut rows) = (Vec::new(), Vec::new());
+        for span in spans {
+            let chunk: Vec<usize> = (span.start..=span.end.min(y.len().saturating_sub(1))).filter(|&i| y[i].is_finite()).collect();
+            if chunk.len() >= 2 {
+                segments.push(*span);
+                rows.push(chunk);
+            }
+        }
+        Self { input, y, sigma: sigma.max(1e-9), joint, segments, rows }
+    }
+
     /// Number of residuals.
     #[must_use]
     pub fn n_rows(&self) -> usize {

@@ -10,9 +10,13 @@
 //!   limit or a real rubber stop throws the joint back at a fraction of its speed. Where the
 //!   recording reaches a limit, the replay takes the restitution that replays it best. It is no
 //!   effect and is never reported as one (the effects themselves are fitted with dead limits).
+//! - A limit the recording reaches only after the split: nothing before it shows how the joint
+//!   bounces there, so the held-out replay is not carried through it but starts again from the
+//!   state measured as the joint leaves it, for the model as written and the fitted one alike.
 
 use super::effects::{Effect, JointPhysics};
 use super::fit;
+use super::locate::Span;
 use super::model::GapJoint;
 use super::recording::Recording;
 use super::report::RmsePair;
@@ -48,9 +52,57 @@ pub(super) fn held_out(
         let pieces = fit::Problem::with_segments_of(input, y, &held, sigma, joint, horizon_s);
         (replay_pieces(&pieces, &nominal), replay_pieces(&pieces, &fitted))
     } else {
-        (b, a)
+        let visits = unseen_limit_visits(y, &train, sigma, &nominal);
+        if visits.is_empty() {
+            (b, a)
+        } else {
+            let pieces = fit::Problem::with_spans(input, y, &spans_after(&visits, y.len()), sigma, joint);
+            (restart_after(&b, &visits, &replay_pieces(&pieces, &nominal)), restart_after(&a, &visits, &replay_pieces(&pieces, &fitted)))
+        }
     };
     rmse_pair(y, &b, &a, |i| rec.time_s[i] >= t_split).0
+}
+
+/// Runs of held-out samples (`!train`) where the recording is at a limit of the model
+/// (`physics.lower`/`upper`, within [`AT_LIMIT_SIGMAS`] noise σs) that the training part never
+/// reaches. How the joint bounces there nothing before the split shows (no URDF says it, and the
+/// replay's restitution is chosen on the training part: [`replay_with_bounce`]), so a replay
+/// carried through such a visit would score a guess, the same for every model.
+fn unseen_limit_visits(y: &[f64], train: &[bool], sigma: f64, physics: &JointPhysics) -> Vec<Span> {
+    let band = AT_LIMIT_SIGMAS * sigma;
+    let at = |limit: Option<f64>, i: usize, below: bool| {
+        y[i].is_finite() && limit.is_some_and(|l| if below { y[i] <= l + band } else { y[i] >= l - band })
+    };
+    let seen = |limit: Option<f64>, below: bool| (0..y.len()).any(|i| train[i] && at(limit, i, below));
+    let unseen = [(physics.lower, true), (physics.upper, false)].into_iter().filter(|&(l, below)| l.is_some() && !seen(l, below));
+    let unseen: Vec<(Option<f64>, bool)> = unseen.collect();
+    let mut visits: Vec<Span> = Vec::new();
+    for i in (0..y.len()).filter(|&i| !train[i] && unseen.iter().any(|&(l, below)| at(l, i, below))) {
+        match visits.last_mut() {
+            Some(v) if v.end + 1 == i => v.end = i,
+            _ => visits.push(Span { start: i, end: i }),
+        }
+    }
+    visits
+}
+
+/// The stretches after each visit up to the next one (or the end of `n` samples).
+fn spans_after(visits: &[Span], n: usize) -> Vec<Span> {
+    visits
+        .iter()
+        .enumerate()
+        .filter_map(|(k, v)| {
+            let end = visits.get(k + 1).map_or(n.saturating_sub(1), |next| next.start.saturating_sub(1));
+            (v.end + 1 <= end).then_some(Span { start: v.end + 1, end })
+        })
+        .collect()
+}
+
+/// `open_loop` up to the first visit, nothing (NaN: not scored) during the visits, and after each
+/// visit the piece replayed from the state measured as the joint leaves the limit.
+fn restart_after(open_loop: &[f64], visits: &[Span], pieces: &[f64]) -> Vec<f64> {
+    let first = visits.first().map_or(open_loop.len(), |v| v.start);
+    (0..open_loop.len()).map(|i| if i < first { open_loop[i] } else { pieces[i] }).collect()
 }
 
 /// What the report says about a restitution the replays used, if any.
@@ -221,5 +273,32 @@ mod tests {
         // A model whose limit the recording never reaches (here at −0.2 m) gets no bounce, even if
         // a replay drifts into it.
         assert!(bounce(&all, drawer(-0.2, 0.5)).abs() < 1e-12);
+    }
+
+    /// The visits to a limit first reached after the split (the first `train` samples train),
+    /// as (start, end) sample pairs, for positions `y` of a drawer with limits 0 and 0.5 m.
+    fn check_visits(y: &[f64], train: usize, expected: &[(usize, usize)]) {
+        let mask: Vec<bool> = (0..y.len()).map(|i| i < train).collect();
+        let got: Vec<(usize, usize)> = unseen_limit_visits(y, &mask, 1e-3, &drawer(0.0, 0.5)).iter().map(|v| (v.start, v.end)).collect();
+        assert_eq!(got, expected);
+    }
+
+    #[test]
+    fn a_held_out_replay_starts_again_after_a_limit_only_the_held_out_part_reaches() {
+        // Regression: a drawer first shut against its modelled limit after the split was replayed
+        // through the bounce with the dead limit its training part had chosen, and the guess
+        // dominated its held-out error (MuJoCo's soft limit, 4.4× instead of 39× cut).
+        let y = [0.2, 0.1, 0.05, 0.0, 0.001, 0.02, 0.04, 0.002, 0.03];
+        check_visits(&y, 3, &[(3, 4), (7, 7)]);
+        // Reached before the split too: the replay's restitution was chosen on it.
+        check_visits(&y, 5, &[]);
+        // The upper limit counts on its own.
+        check_visits(&[0.1, 0.0, 0.3, 0.5, 0.2], 2, &[(3, 3)]);
+        assert_eq!(spans_after(&[Span { start: 3, end: 4 }, Span { start: 7, end: 7 }], 9), [Span { start: 5, end: 6 }, Span { start: 8, end: 8 }]);
+        let pieces = [f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN, 7.0, 8.0];
+        let out = restart_after(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0], &[Span { start: 3, end: 4 }], &pieces);
+        assert_eq!(&out[..3], &[1.0, 2.0, 3.0]);
+        assert!(out[3].is_nan() && out[4].is_nan());
+        assert_eq!(&out[5..], &[7.0, 8.0]);
     }
 }
