@@ -93,7 +93,7 @@ fn spans_after(visits: &[Span], n: usize) -> Vec<Span> {
         .enumerate()
         .filter_map(|(k, v)| {
             let end = visits.get(k + 1).map_or(n.saturating_sub(1), |next| next.start.saturating_sub(1));
-            (v.end + 1 <= end).then_some(Span { start: v.end + 1, end })
+            (v.end < end).then_some(Span { start: v.end + 1, end })
         })
         .collect()
 }
