@@ -368,6 +368,48 @@ pub struct JointFinding {
     pub rejected: Vec<String>,
 }
 
+impl JointFinding {
+    /// The static level and the speed below which the joint counts as at rest, of the dry
+    /// friction found on it (`coulomb_friction`: the larger of its two levels within its
+    /// transition speed; `stribeck_friction`: its break-away within its Stribeck speed).
+    fn friction_at_rest(&self) -> Option<(f64, f64)> {
+        self.effects.iter().find_map(|e| match e.kind {
+            EffectKind::CoulombFriction => Some((e.params[0].max(e.params[2].abs()).max(0.0), e.params[1])),
+            EffectKind::StribeckFriction => Some((e.params[0].max(e.params[1]).max(0.0), e.params[2])),
+            _ => None,
+        })
+    }
+
+    /// The finding with dry friction granted its whole range at rest. Stuck, a joint's friction
+    /// is whatever holds it, up to its static level, not the smooth law's value near zero speed;
+    /// a residual within that level where the joint rests (`speed`, the smoothed velocity, below
+    /// the friction's transition) is friction, not an unexplained effort. Without dry friction,
+    /// or where it changes nothing, the finding as it is.
+    #[must_use]
+    pub fn with_friction_at_rest(&self, speed: &[f64]) -> Self {
+        let Some((level, rest_speed)) = self.friction_at_rest() else { return self.clone() };
+        let residual_after: Vec<f64> = self
+            .residual_after
+            .iter()
+            .zip(speed)
+            .map(|(&r, &v)| {
+                if !(r.is_finite() && v.abs() <= rest_speed) {
+                    return r;
+                }
+                // The smooth law's share at this speed back in, then the static range out.
+                let held = r + level * (v / rest_speed.max(1e-12)).tanh();
+                held.signum() * (held.abs() - level).max(0.0)
+            })
+            .collect();
+        let before = rms(self.residual_after.iter().copied().filter(|x| x.is_finite()));
+        let after = rms(residual_after.iter().copied().filter(|x| x.is_finite()));
+        if after.partial_cmp(&before) != Some(std::cmp::Ordering::Less) {
+            return self.clone();
+        }
+        Self { cv_rms_after: self.cv_rms_after * after / before, residual_after, ..self.clone() }
+    }
+}
+
 /// The whole effort-space problem.
 pub struct EffortProblem<'a> {
     model: &'a GapModel,
@@ -1323,5 +1365,46 @@ mod tests {
         check(&[0.0, 2.0], 2, 1.0);
         check(&[0.0, f64::NAN, 2.0], 2, 1.0);
         check(&[], 4, 0.0);
+    }
+
+    /// The residual left after granting dry friction of `effects` its static range where the
+    /// joint rests, for residuals `residual` at smoothed speeds `speed`.
+    fn check_at_rest(effects: Vec<Effect>, residual: &[f64], speed: &[f64], expected: &[f64]) {
+        let finding = JointFinding {
+            joint: 0,
+            param_std: vec![Vec::new(); effects.len()],
+            confidence: vec![1.0; effects.len()],
+            effect_rms: vec![1.0; effects.len()],
+            effects,
+            cv_rms_before: 2.0,
+            cv_rms_after: 1.0,
+            effort_rms: 5.0,
+            gravity_rms: 0.0,
+            residual_before: residual.to_vec(),
+            residual_after: residual.to_vec(),
+            rejected: Vec::new(),
+        };
+        let got = finding.with_friction_at_rest(speed);
+        assert_eq!(got.residual_after, expected);
+        let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+        assert!((got.cv_rms_after - rms(expected) / rms(residual)).abs() < 1e-12, "{}", got.cv_rms_after);
+    }
+
+    #[test]
+    fn a_drawer_stuck_under_its_friction_leaves_no_unknown_effort() {
+        // Regression: a loaded drawer (DART, exact sticking) pushed at 3–6 N under its 6 N dry
+        // friction for most of its recording was reported with an `unknown` of 1.7 N beside the
+        // friction found: the smooth law gives no force at rest, the stuck joint's friction does.
+        let coulomb = |forward: f64, reverse: f64| Effect {
+            kind: EffectKind::CoulombFriction,
+            params: vec![forward, 0.02, reverse],
+            blocks_upward: false,
+        };
+        check_at_rest(vec![coulomb(6.0, f64::NAN)], &[4.0, -5.0, 7.0, 3.0], &[0.0, 0.0, 0.0, 0.5], &[0.0, 0.0, 1.0, 3.0]);
+        // The larger level of a direction-dependent friction bounds what holds it.
+        check_at_rest(vec![coulomb(2.0, 4.0)], &[3.0, -5.0], &[0.0, 0.0], &[0.0, -1.0]);
+        // Without dry friction nothing changes.
+        let damping = Effect { kind: EffectKind::ViscousDamping, params: vec![1.0], blocks_upward: false };
+        check_at_rest(vec![damping], &[4.0, -5.0], &[0.0, 0.0], &[4.0, -5.0]);
     }
 }

@@ -276,6 +276,12 @@ pub(super) fn analyze_effort_space(
         let y = &positions[d];
         let replays =
             Replays { before: &before[d], after: &after[d], held_before: &held_before[d], held: held.as_ref().map(|h| h[d].as_slice()) };
+        // The smooth friction law cannot hold a joint still: a residual within the friction's
+        // static range where the joint rests is friction, not `unknown` (it still lets a lone
+        // joint's exact simulation, which sticks, choose the terms again).
+        let smooth_law_unexplained = unexplained(&rules, f);
+        let speed: Vec<f64> = sig.q[d].iter().map(|x| x[1]).collect();
+        let f = &f.with_friction_at_rest(&speed);
         let mut outcome = joint_outcome(&band, model, rec, cfg, &rules, f, y, &replays, gravity, t_split);
         if in_serial_chain(model, f.joint) {
             out.push(outcome);
@@ -289,12 +295,19 @@ pub(super) fn analyze_effort_space(
                     effects: f.effects.clone(),
                     confidence: f.confidence.clone(),
                     extra: outcome.effects.into_iter().filter(|e| e.kind == EffectKind::Unknown.name()).collect(),
+                    effort_unexplained: smooth_law_unexplained,
                     analysis: outcome.analysis,
                 },
             );
         }
     }
     Ok((out, given))
+}
+
+/// Whether `f` leaves effort unexplained beyond the joint's own effort and beyond what the
+/// model's weights and centres of mass can be trusted to ([`SelectionRules::min_static_load_share`]).
+fn unexplained(rules: &SelectionRules, f: &JointFinding) -> bool {
+    f.cv_rms_after > rules.unknown_share * f.effort_rms && f.cv_rms_after > rules.min_static_load_share * f.gravity_rms
 }
 
 struct Replays<'a> {
@@ -404,9 +417,7 @@ fn joint_outcome(
     let position_residual: Vec<f64> = y.iter().zip(replays.before).map(|(a, b)| a - b).collect();
     let mismatches: Vec<Mismatch> =
         spans.iter().map(|s| effort_mismatch(rec, joint, y, &f.residual_before, &position_residual, *s, force)).collect();
-    // Unexplained beyond the joint's own effort and beyond what the model's weights and centres
-    // of mass can be trusted to (SelectionRules::min_static_load_share).
-    if f.cv_rms_after > rules.unknown_share * f.effort_rms && f.cv_rms_after > rules.min_static_load_share * f.gravity_rms {
+    if unexplained(rules, f) {
         let left = mismatch_spans(&f.residual_after, floor.min(rules.unknown_share * f.effort_rms), cfg.min_mismatch_samples);
         let at: Vec<String> = left.iter().take(4).map(|s| format!("{:.2}–{:.2} s", rec.time_s[s.start], rec.time_s[s.end])).collect();
         let share = f.cv_rms_after / f.effort_rms.max(1e-12);

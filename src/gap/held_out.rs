@@ -294,7 +294,10 @@ mod tests {
         check_visits(&y, 5, &[]);
         // The upper limit counts on its own.
         check_visits(&[0.1, 0.0, 0.3, 0.5, 0.2], 2, &[(3, 3)]);
-        assert_eq!(spans_after(&[Span { start: 3, end: 4 }, Span { start: 7, end: 7 }], 9), [Span { start: 5, end: 6 }, Span { start: 8, end: 8 }]);
+        assert_eq!(
+            spans_after(&[Span { start: 3, end: 4 }, Span { start: 7, end: 7 }], 9),
+            [Span { start: 5, end: 6 }, Span { start: 8, end: 8 }]
+        );
         let pieces = [f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN, 7.0, 8.0];
         let out = restart_after(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0], &[Span { start: 3, end: 4 }], &pieces);
         assert_eq!(&out[..3], &[1.0, 2.0, 3.0]);

@@ -363,10 +363,10 @@ fn analyze_joint(
                 (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
             };
             let unexplained = rms(&left) > 0.5 * rms(&residual);
-            // Only where effort space itself could not explain the efforts (its `unknown`): when it
+            // Only where effort space itself could not explain the efforts with its smooth laws: when it
             // could, a position misfit comes from how stops are simulated (an engine's soft limits
             // against our hard ones), not from missing physics.
-            let effort_unexplained = !g.extra.is_empty();
+            let effort_unexplained = g.effort_unexplained;
             let alternative =
                 (effort_unexplained && !spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma).then(select_here);
             // The alternative must prove itself on data it was not fitted to.
@@ -619,6 +619,9 @@ struct Given {
     confidence: Vec<f64>,
     /// Reports that stay as effort space gave them (`unknown`).
     extra: Vec<EffectReport>,
+    /// Whether effort space's smooth laws left effort unexplained (dry friction held to its
+    /// smooth law at rest): then the joint's exact simulation may choose the terms again.
+    effort_unexplained: bool,
     /// How the joint was analysed.
     analysis: report::JointAnalysis,
 }
