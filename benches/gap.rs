@@ -1,4 +1,4 @@
-//! The reality-gap analysis of a 10 s, 100 Hz recording (two joints, effects on both): locate,
+//! The reality-gap analysis of a 10 s, 100 Hz recording (three joints, effects on each): locate,
 //! select, fit, validate (issue budget 2 s in a release build on 2 cores); and of a 7-joint arm,
 //! 20 s at 200 Hz, efforts recorded (effort space, budget 3 s). The arm's recording is a replay of
 //! its own model with friction and damping on every joint (our integrator: speed, not a claim).
@@ -19,8 +19,11 @@ const CABINET: &str = r#"<robot name="cabinet">
   <link name="drawer"><collision><origin xyz="0 0.25 0"/><geometry><box size="0.5 0.5 0.02"/></geometry></collision></link>
   <joint name="door_hinge" type="revolute"><parent link="body"/><child link="door"/><origin xyz="0 -0.01 0.4"/>
     <axis xyz="0 0 1"/><limit lower="0" upper="2.0" effort="10" velocity="3"/></joint>
+  <link name="lid"><collision><origin xyz="0 0.2 0"/><geometry><box size="0.6 0.4 0.02"/></geometry></collision></link>
   <joint name="drawer_slide" type="prismatic"><parent link="body"/><child link="drawer"/><origin xyz="0.3 0.0 0.2"/>
     <axis xyz="0 -1 0"/><limit lower="0" upper="0.45" effort="50" velocity="1"/></joint>
+  <joint name="lid_hinge" type="revolute"><parent link="body"/><child link="lid"/><origin xyz="0.3 0.0 0.85"/>
+    <axis xyz="1 0 0"/><limit lower="0" upper="1.6" effort="10" velocity="3"/></joint>
 </robot>"#;
 
 /// A 7-joint serial arm, axes alternating z / y, links 0.3 m.
@@ -83,6 +86,7 @@ fn bench(c: &mut Criterion) {
         effects: vec![
             ("door_hinge".into(), TrueEffect::ViscousDamping { damping: 0.3 }),
             ("drawer_slide".into(), TrueEffect::CoulombFriction { friction: 3.0 }),
+            ("lid_hinge".into(), TrueEffect::ViscousDamping { damping: 0.2 }),
         ],
         dropout_fraction: 0.02,
         ..GenerateConfig::default()
@@ -92,7 +96,7 @@ fn bench(c: &mut Criterion) {
     let config = GapConfig::default();
     let mut group = c.benchmark_group("gap");
     group.sample_size(10);
-    group.bench_function("analyze 10 s @ 100 Hz, 2 joints", |b| b.iter(|| analyze(&model, &rec, &config).expect("analyses")));
+    group.bench_function("analyze 10 s @ 100 Hz, 3 joints", |b| b.iter(|| analyze(&model, &rec, &config).expect("analyses")));
     // Two effects on one joint: the selection goes through every pair of kinds.
     let combined = GenerateConfig {
         effects: vec![
