@@ -424,9 +424,11 @@ fn analyze_joint(
     };
     // Terms chosen in position space must hold on data they were not fitted to: a structure
     // that makes the held-out replay worse is not reported (it fits how stops or friction are
-    // simulated, not missing physics).
+    // simulated, not missing physics). A held-out part that both replays follow to within the
+    // noise (a lid resting open on its stop after the split) tests nothing, and vetoes nothing.
     let mut held = held_out::held_out(rec, input, y, sigma, joint, &chosen.effects, t_split);
-    let (chosen, confidence) = if given.is_none() && !chosen.effects.is_empty() && held.rmse_after >= held.rmse_before {
+    let held_tests = held.rmse_before.max(held.rmse_after) > HELD_OUT_NOISE_SIGMAS * sigma;
+    let (chosen, confidence) = if given.is_none() && !chosen.effects.is_empty() && held_tests && held.rmse_after >= held.rmse_before {
         let kinds: Vec<&str> = chosen.effects.iter().map(|e| e.kind.name()).collect();
         rejected_here.push(format!(
             "{}: fitted, but the held-out replay got worse ({:.4} → {:.4} {unit}) — not reported",
@@ -534,6 +536,11 @@ const POSITION_MODEL_FORM_SHARE: f64 = 0.02;
 
 /// Parameters that are positions (no relative floor).
 const POSITION_PARAMS: [&str; 4] = ["rest_position", "equilibrium_position", "position", "engage_position"];
+
+/// Held-out RMSE (in noise σ) within which a replay follows the recording as well as its noise
+/// lets any replay: where both the model as written and the fitted one do, the held-out part
+/// cannot tell them apart.
+const HELD_OUT_NOISE_SIGMAS: f64 = 2.0;
 
 /// How much better on held-out data a structure chosen in position space must be than the one
 /// effort space chose, to replace it.
