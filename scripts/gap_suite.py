@@ -932,7 +932,8 @@ def simulate(sim, steps, q0, source, pose_links=()):
     return traj
 
 
-SIMULATORS = {  # case.engine -> sim of (case, mech, effects, gravity); gap_suite_physx.py adds "physx"
+# case.engine -> sim of (case, mech, effects, gravity); gap_suite_physx.py adds "physx", the other engine suites theirs
+SIMULATORS = {
     "mujoco": lambda case, mech, effects, gravity: MujocoSim(mujoco_model(mech, effects, gravity, case.solref_limit),
                                                              mech.movable()),
     "bullet": lambda case, mech, effects, gravity: BulletSim(mech, effects, gravity),
@@ -1191,8 +1192,8 @@ def run_case(case, seed, out):
 
 def run_engine_case(case, seed, out, engine, checks, make_sim):
     """Simulates one case with an engine and writes DIR/<case>/{model.urdf, recording.csv, truth.json}
-    (this suite's engines and those of gap_suite_physx.py, gap_suite_dart.py): `checks` holds the engine's
-    check_rigid(case, engine_mech, nominal, rng), measure_effects(case, engine_mech, rng),
+    (this suite's engines and those of gap_suite_physx.py, gap_suite_dart.py, gap_suite_drake.py): `checks` holds
+    the engine's check_rigid(case, engine_mech, nominal, rng), measure_effects(case, engine_mech, rng),
     effect_detail(case, effect, engine_mech, measured) and engine_text(rigid_err); `make_sim(engine_mech)`
     builds the engine's simulation of the case."""
     check_rigid, measure_effects, effect_detail, engine_text = checks
@@ -1719,7 +1720,7 @@ class ArmRun:
 
 
 def engine_suite_main(cases, run_case, checks=()):
-    """The command line of an engine's suite of its own (gap_suite_physx.py, gap_suite_dart.py):
+    """The command line of an engine's suite of its own (gap_suite_physx.py, gap_suite_dart.py, gap_suite_drake.py):
     --out, --seed, --only over `cases()`; each (kind, check) in `checks` runs once before the cases
     when a chosen case has an effect of that kind; `run_case(case, seed, out)` writes a case."""
     parser = argparse.ArgumentParser(description=sys.modules["__main__"].__doc__.split("\n\n")[0])
