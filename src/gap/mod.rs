@@ -333,8 +333,7 @@ fn analyze_joint(
         // motion is still far from explained (effort space could not see an effect that acts
         // mostly near a stop, say), the terms are chosen here instead.
         Some(g) => {
-            let mut refined =
-                if g.effects.is_empty() { nominal.clone() } else { fit::fit(&problem, &g.effects, Some(&free_mask(&g.effects)), None, 25) };
+            let mut refined = if g.effects.is_empty() { nominal.clone() } else { refine_from_bounces(&problem, &g.effects) };
             // The refined levels face the same rules as in effort space: a weight change that
             // shrank below materiality, or a level the refinement cannot tell from none (within
             // two σ of it), is dropped, one at a time, and the rest refitted.
@@ -635,6 +634,40 @@ struct Given {
 
 /// Which parameters output error refines: the levels, not the shape parameters effort space
 /// chose on its grid (transition and Stribeck speeds), nor parameters that are absent (NaN).
+/// Restitutions an end stop's output-error refinement also starts from ([`refine_from_bounces`]).
+const STOP_RESTITUTION_STARTS: [f64; 3] = [0.3, 0.6, 0.9];
+
+/// `effects` refined by output error; where they hold an end stop, also from each of
+/// [`STOP_RESTITUTION_STARTS`], the fit with the least cost kept. A replay's fit is not smooth in a
+/// stop's restitution (each bounce changes where the next impact falls), and the estimate
+/// from short impacts sees nothing of a compliant stop that holds the joint for tens of
+/// milliseconds and throws it back at 0.6–0.9 of its speed (a penalty-spring limit): from 0 the
+/// refinement stayed at 0 on such a door.
+fn refine_from_bounces(problem: &fit::Problem<'_>, effects: &[Effect]) -> fit::FitResult {
+    let mask = free_mask(effects);
+    let mut best = fit::fit(problem, effects, Some(&mask), None, 25);
+    if !effects.iter().any(|e| e.kind == EffectKind::EndStop) {
+        return best;
+    }
+    for r in STOP_RESTITUTION_STARTS {
+        let start: Vec<Effect> = effects
+            .iter()
+            .map(|e| {
+                let mut e = e.clone();
+                if e.kind == EffectKind::EndStop && e.params.len() > 1 {
+                    e.params[1] = r;
+                }
+                e
+            })
+            .collect();
+        let fitted = fit::fit(problem, &start, Some(&mask), None, 25);
+        if fitted.cost < best.cost * (1.0 - 1e-9) {
+            best = fitted;
+        }
+    }
+    best
+}
+
 fn free_mask(effects: &[Effect]) -> Vec<Vec<bool>> {
     effects
         .iter()
