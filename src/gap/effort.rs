@@ -918,7 +918,7 @@ const MIN_FOLD_SAMPLES: usize = 10;
 
 /// Largest relative rise of the held-out error at which a rotor's inertia and a heavier part
 /// count as the same explanation ([`EffortProblem::look_alike`]).
-const LOOK_ALIKE_SSE_SHARE: f64 = 0.01;
+pub const LOOK_ALIKE_SSE_SHARE: f64 = 0.01;
 
 /// How a candidate fared against the current model.
 #[derive(Debug, Clone, Copy)]

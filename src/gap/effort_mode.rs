@@ -33,7 +33,8 @@ const EQUATION_BANDS: [f64; 2] = [5.0, 2.5];
 /// Per identified joint: samples in contact with a modelled stop, from the measured positions
 /// (within [`CONTACT_SHARE`] of the travel or four noise σ of the limit), widened by the
 /// smoothing window, since the smoothed acceleration smears an impact over it.
-fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows: &[usize], half_width_s: f64) -> Vec<Vec<bool>> {
+fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows: &[usize], bandwidth: &Bandwidth) -> Vec<Vec<bool>> {
+    let half_width_s = bandwidth.support_s();
     let dofs = model.dofs();
     let n = time_s.len();
     rows.iter()
@@ -47,7 +48,7 @@ fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows:
                     y[i].is_finite() && (joint.lower.is_some_and(|l| y[i] <= l + band) || joint.upper.is_some_and(|u| y[i] >= u - band))
                 })
                 .collect();
-            touch_through_gaps(&mut touching, y);
+            touch_through_gaps(&mut touching, time_s, y, bandwidth.narrow_s);
             let mut mask = vec![false; n];
             widen_into(&mut mask, &touching, time_s, half_width_s);
             mask
@@ -55,11 +56,13 @@ fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows:
         .collect()
 }
 
-/// Marks every run of missing positions in `y` that a contact sample borders (just before or
-/// just after it) as contact too: nothing measured says where the joint was meanwhile, and a lid
-/// seen falling before a tracking dropout and resting shut after it hit its stop inside the gap,
-/// where the derivatives are interpolated across the impact.
-fn touch_through_gaps(touching: &mut [bool], y: &[f64]) {
+/// Marks every run of missing positions in `y` longer than `narrow_s` (the differentiator's
+/// half-width) that a contact sample borders (just before or just after it) as contact too:
+/// nothing measured says where the joint was meanwhile, and a lid seen falling before a tracking
+/// dropout and resting shut after it hit its stop inside the gap, where the derivatives are
+/// interpolated across the impact. A shorter gap lies within the smoothing window of the contact
+/// beside it, whose widening covers it already.
+fn touch_through_gaps(touching: &mut [bool], time_s: &[f64], y: &[f64], narrow_s: f64) {
     let n = y.len();
     let mut i = 0;
     while i < n {
@@ -72,7 +75,10 @@ fn touch_through_gaps(touching: &mut [bool], y: &[f64]) {
             i += 1;
         }
         let bordered = (start > 0 && touching[start - 1]) || (i < n && touching[i]);
-        if bordered {
+        let before = time_s[start.saturating_sub(1)];
+        let after = time_s[i.min(n - 1)];
+        let long = after - before > narrow_s;
+        if bordered && long {
             touching[start..i].iter_mut().for_each(|t| *t = true);
         }
     }
@@ -197,7 +203,7 @@ fn identify_at(
     let sig = signals(&rec.time_s, positions, efforts, &band);
     // Joints that spend most of the recording against their stops leave effort space too little
     // free motion to regress on; position space (simulation through the stops) takes them.
-    let all_excluded = contact_masks(model, &rec.time_s, positions, rows, support_s);
+    let all_excluded = contact_masks(model, &rec.time_s, positions, rows, &band);
     let rows: Vec<usize> = rows
         .iter()
         .zip(&all_excluded)
@@ -207,7 +213,7 @@ fn identify_at(
     if rows.is_empty() {
         return None;
     }
-    let mut excluded = contact_masks(model, &rec.time_s, positions, &rows, support_s);
+    let mut excluded = contact_masks(model, &rec.time_s, positions, &rows, &band);
     let everything = vec![true; n];
     let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
     let first = EffortProblem::new(model, &sig, gravity, &rows, &excluded, &everything, rules.clone())?;
@@ -524,7 +530,8 @@ mod tests {
     /// `at_stop` are in contact.
     fn check(y: &[f64], at_stop: &[usize], expected: &[usize]) {
         let mut touching: Vec<bool> = (0..y.len()).map(|i| at_stop.contains(&i)).collect();
-        touch_through_gaps(&mut touching, y);
+        let time_s: Vec<f64> = (0..y.len()).map(|i| 0.01 * i as f64).collect();
+        touch_through_gaps(&mut touching, &time_s, y, 0.025);
         let got: Vec<usize> = (0..y.len()).filter(|&i| touching[i]).collect();
         assert_eq!(got, expected, "{y:?}");
     }
@@ -538,6 +545,8 @@ mod tests {
         check(&[0.6, 0.4, nan, nan, 0.0, 0.0], &[4, 5], &[2, 3, 4, 5]);
         // Leaving the stop during a gap, likewise.
         check(&[0.0, nan, nan, 0.3], &[0], &[0, 1, 2]);
+        // A gap no longer than the differentiator's half-width: the contact's widening covers it.
+        check(&[0.6, 0.4, nan, 0.0, 0.0], &[3, 4], &[3, 4]);
         // A gap in free motion stays free.
         check(&[0.6, nan, 0.5, 0.0], &[3], &[3]);
         check(&[nan, nan], &[], &[]);

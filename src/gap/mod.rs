@@ -440,6 +440,13 @@ fn analyze_joint(
     } else {
         (chosen, confidence)
     };
+    let chosen = match inertia_alone(&problem, &chosen) {
+        Some((armature, note)) => {
+            rejected_here.push(note);
+            armature
+        }
+        None => chosen,
+    };
     let fitted_physics = JointPhysics::with_effects(joint, &chosen.effects);
     let mut effects: Vec<EffectReport> = chosen
         .effects
@@ -634,6 +641,33 @@ struct Given {
 
 /// Which parameters output error refines: the levels, not the shape parameters effort space
 /// chose on its grid (transition and Stribeck speeds), nor parameters that are absent (NaN).
+/// The spec's rule in position space: a heavier part (`mass_scale`) is inertia and weight
+/// together, inertia alone is `armature`. Where the fit with a rotor's inertia in place of the
+/// heavier part is as good (cost within [`effort::LOOK_ALIKE_SSE_SHARE`]: gravity does no work
+/// on the joint, a horizontal drawer or a knob turning about its centre of mass), the weight was
+/// never seen: the armature fit, and what the report says of the other reading. (A drawer that
+/// rests on its stop most of the time reaches position space without effort space's own rule.)
+fn inertia_alone(problem: &fit::Problem<'_>, chosen: &fit::FitResult) -> Option<(fit::FitResult, String)> {
+    let k = chosen.effects.iter().position(|e| e.kind == EffectKind::MassScale)?;
+    if chosen.effects.iter().any(|e| e.kind == EffectKind::Armature) {
+        return None;
+    }
+    let scale = chosen.effects[k].params[0];
+    let inertia = problem.input.terms.iter().map(|t| t.inertia).find(|i| i.is_finite())?;
+    let mut effects = chosen.effects.clone();
+    effects[k] = Effect { kind: EffectKind::Armature, params: vec![((scale - 1.0) * inertia).max(0.0)], blocks_upward: false };
+    let fitted = fit::fit(problem, &effects, Some(&free_mask(&effects)), None, 25);
+    let as_good = fitted.cost <= chosen.cost * (1.0 + effort::LOOK_ALIKE_SSE_SHARE);
+    let armature = fitted.effects.get(k).and_then(|e| e.params.first()).copied().unwrap_or(0.0);
+    (as_good && armature > 0.0).then(|| {
+        let note = format!(
+            "mass_scale: a part {scale:.3}× as heavy fits as well as a rotor's inertia of {armature:.4} — gravity does no work on \
+             the joint, so the weight was never seen; inertia alone is reported as armature (the other reading)"
+        );
+        (fitted, note)
+    })
+}
+
 /// Restitutions an end stop's output-error refinement also starts from ([`refine_from_bounces`]).
 const STOP_RESTITUTION_STARTS: [f64; 3] = [0.3, 0.6, 0.9];
 
