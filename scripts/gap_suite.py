@@ -72,7 +72,7 @@ import tempfile
 import time
 import xml.etree.ElementTree as ET
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import metadata
 
 import mujoco
@@ -257,6 +257,23 @@ def double_pendulum(l1, m1, l2, m2):
         Joint("shoulder", "continuous", "base", upper.name, axis=(0, 1, 0)),
         Joint("elbow", "continuous", upper.name, lower.name, xyz=(0.0, 0.0, -l1), axis=(0, 1, 0)),
     ])
+
+
+def cabinet_door():
+    """A cabinet door: I = 0.135 kg m^2 about its hinge."""
+    return door(0.45, 0.7, 2.0)
+
+
+def wardrobe_door():
+    """A heavy wardrobe door: I = 0.96 kg m^2 about its hinge."""
+    return door(0.6, 1.9, 8.0)
+
+
+def chest_lid():
+    """A chest lid: I = 0.08 kg m^2 about its hinge, 2.9 N m of weight."""
+    return lid(0.4, 0.5, 1.5)
+
+
 # ---------------------------------------------------------------- URDF
 
 
@@ -657,13 +674,12 @@ def sines(joints, amp, centre):
 
 
 def mujoco_cases():
-    door_s = lambda: door(0.45, 0.7, 2.0)  # noqa: E731  I = 0.135 kg m^2
-    door_l = lambda: door(0.6, 1.9, 8.0)  # noqa: E731  I = 0.96 kg m^2
-    lid_m = lambda: lid(0.4, 0.5, 1.5)  # noqa: E731  I = 0.08 kg m^2, 2.9 N m of weight
     return [
-        Case("mj_door_damping", "mujoco", door_s(), "cabinet door pushed and released; the hinge is viscously damped",
+        Case("mj_door_damping", "mujoco", cabinet_door(),
+             "cabinet door pushed and released; the hinge is viscously damped",
              [fx("hinge", "viscous_damping", damping=0.25)], push(["hinge"], [1.5]), {"hinge": 0.3}),
-        Case("mj_door_friction", "mujoco", door_l(), "heavy wardrobe door pushed and released; dry hinge friction",
+        Case("mj_door_friction", "mujoco", wardrobe_door(),
+             "heavy wardrobe door pushed and released; dry hinge friction",
              [fx("hinge", "coulomb_friction", friction=1.0)], push(["hinge"], [5.0]), {"hinge": 0.4}, effort_noise=0.01),
         Case("mj_flap_spring", "mujoco", door(0.25, 0.3, 0.4), "light flap on a vertical hinge with a return spring, pushed",
              [fx("hinge", "spring", stiffness=0.15, rest_position=1.0)], push(["hinge"], [0.2]), {"hinge": 0.1},
@@ -671,7 +687,8 @@ def mujoco_cases():
         Case("mj_knob_armature", "mujoco", knob(0.04, 0.12), "geared knob (rotor inertia) driven by a multisine",
              [fx("knob", "armature", armature=1.5e-4)], sines(["knob"], [2e-3], [0.0]), duration=6.0, rate=500,
              noise=(1e-3, 3e-4)),
-        Case("mj_lid_mass_scale", "mujoco", lid_m(), "chest lid held open by a multisine effort; the lid is heavier than modelled",
+        Case("mj_lid_mass_scale", "mujoco", chest_lid(),
+             "chest lid held open by a multisine effort; the lid is heavier than modelled",
              [fx("lid_hinge", "mass_scale", scale=1.35)], sines(["lid_hinge"], [0.8], [0.9]), {"lid_hinge": 0.9},
              effort_noise=0.01),
         Case("mj_drawer_end_stop", "mujoco", drawer(0.45, 0.5, 0.15, 4.0, 0.45),
@@ -683,13 +700,15 @@ def mujoco_cases():
         Case("mj_drawer_effort_offset", "mujoco", drawer(0.4, 0.45, 0.12, 2.5, 0.4),
              "drawer pushed and released; the force sensor reads low by a constant",
              [fx("slide", "effort_offset", offset=2.0)], push(["slide"], [12.0]), {"slide": 0.1}, effort_noise=0.01),
-        Case("mj_door_friction_damping", "mujoco", door_s(), "cabinet door, pushed: dry friction and viscous damping",
+        Case("mj_door_friction_damping", "mujoco", cabinet_door(),
+             "cabinet door, pushed: dry friction and viscous damping",
              [fx("hinge", "coulomb_friction", friction=0.2), fx("hinge", "viscous_damping", damping=0.15)],
              push(["hinge"], [1.5]), {"hinge": 0.3}),
         Case("mj_lid_spring_damping", "mujoco", lid(0.35, 0.45, 1.2), "counterbalanced lid (spring) with a damper, pushed",
              [fx("lid_hinge", "spring", stiffness=1.2, rest_position=1.6), fx("lid_hinge", "viscous_damping", damping=0.15)],
              push(["lid_hinge"], [1.5]), {"lid_hinge": 0.8}),
-        Case("mj_lid_mass_friction", "mujoco", lid_m(), "lid pushed open and let fall: heavier than modelled, dry hinge",
+        Case("mj_lid_mass_friction", "mujoco", chest_lid(),
+             "lid pushed open and let fall: heavier than modelled, dry hinge",
              [fx("lid_hinge", "mass_scale", scale=1.3), fx("lid_hinge", "coulomb_friction", friction=0.6)],
              push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6}),
         Case("mj_cabinet_drawer_damping", "mujoco", cabinet(),
@@ -709,7 +728,8 @@ def mujoco_cases():
         Case("mj_pendulum_armature", "mujoco", pendulum(0.35, 0.8, 0.04),
              "geared pendulum pushed and released: rotor inertia (inertia without weight)",
              [fx("pivot", "armature", armature=0.02)], push(["pivot"], [1.5]), {"pivot": 0.5}, duration=10.0),
-        Case("mj_door_small_tilt", "mujoco", door_s(), "door pushed and released; hinge SMALL tilt (0.6 deg), at the edge",
+        Case("mj_door_small_tilt", "mujoco", cabinet_door(),
+             "door pushed and released; hinge SMALL tilt (0.6 deg), at the edge",
              [fx("hinge", "gravity_tilt", tilt_deg=0.6, toward=0.8)], push(["hinge"], [1.0]), {"hinge": 0.3}, duration=10.0),
         Case("mj_pendulum_damping", "mujoco", pendulum(0.12, 0.15, 0.02),
              "small pendulum released from 1.4 rad; damped pivot, no noise",
@@ -742,7 +762,6 @@ def nothing_missing_cases():
 
 
 def bullet_cases():
-    door_s = lambda: door(0.45, 0.7, 2.0)  # noqa: E731  I = 0.135 kg m^2
     return [
         Case("bt_door_damping", "bullet", door(0.6, 1.9, 8.0), "heavy wardrobe door pushed and released; damped hinge",
              [fx("hinge", "viscous_damping", damping=0.8)], push(["hinge"], [5.0]), {"hinge": 0.4}),
@@ -764,7 +783,8 @@ def bullet_cases():
              "big lid pushed open and let fall: heavier than modelled, dry hinge",
              [fx("lid_hinge", "mass_scale", scale=1.25), fx("lid_hinge", "coulomb_friction", friction=1.2)],
              push(["lid_hinge"], [9.0]), {"lid_hinge": 0.6}),
-        Case("bt_door_friction_damping", "bullet", door_s(), "cabinet door pushed: dry friction and viscous damping",
+        Case("bt_door_friction_damping", "bullet", cabinet_door(),
+             "cabinet door pushed: dry friction and viscous damping",
              [fx("hinge", "coulomb_friction", friction=0.15), fx("hinge", "viscous_damping", damping=0.2)],
              push(["hinge"], [1.5]), {"hinge": 0.3}, effort_noise=0.01),
         Case("bt_double_pendulum_shoulder_damping", "bullet", double_pendulum(0.3, 0.6, 0.25, 0.4),
@@ -780,6 +800,69 @@ def bullet_cases():
              [fx("door_right", "coulomb_friction", friction=0.25)], push(["door_left", "door_right", "drawer"], [1.5, 1.5, 10.0]),
              {"door_left": 0.2, "door_right": 0.4, "drawer": 0.05}, duration=10.0, jitter=True),
     ]
+
+
+# The cases that several engine suites (gap_suite_physx.py, gap_suite_dart.py, gap_suite_drake.py,
+# gap_suite_newton.py) record alike: key -> Case of (name, engine); engine_case names and makes them.
+ENGINE_CASES = {
+    "door_damping": lambda name, engine: Case(
+        name, engine, cabinet_door(), "cabinet door pushed and released; the hinge is viscously damped",
+        [fx("hinge", "viscous_damping", damping=0.25)], push(["hinge"], [1.5]), {"hinge": 0.3}),
+    "flap_spring": lambda name, engine: Case(
+        name, engine, door(0.25, 0.3, 0.4), "light flap on a vertical hinge with a return spring, pushed",
+        [fx("hinge", "spring", stiffness=0.15, rest_position=1.0)], push(["hinge"], [0.2]), {"hinge": 0.1},
+        duration=6.0, rate=250),
+    "knob_armature": lambda name, engine: Case(
+        name, engine, knob(0.04, 0.12), "geared knob (rotor inertia) driven by a multisine",
+        [fx("knob", "armature", armature=1.5e-4)], sines(["knob"], [2e-3], [0.0]), duration=6.0, rate=500,
+        noise=(1e-3, 3e-4)),
+    "pendulum_armature": lambda name, engine: Case(
+        name, engine, pendulum(0.35, 0.8, 0.04),
+        "geared pendulum pushed and released: rotor inertia (inertia without weight)",
+        [fx("pivot", "armature", armature=0.02)], push(["pivot"], [1.5]), {"pivot": 0.5}, duration=10.0),
+    "sash_mass_scale": lambda name, engine: Case(
+        name, engine, sash(0.8, 0.6, 5.0, 0.5), "window sash lifted by a multisine; heavier than modelled",
+        [fx("sash", "mass_scale", scale=1.3)], sines(["sash"], [30.0], [0.25]), {"sash": 0.25}, effort_noise=0.01),
+    "drawer_end_stop": lambda name, engine: Case(
+        name, engine, drawer(0.45, 0.5, 0.15, 4.0, 0.45),
+        "drawer pushed open and shut; a stop inside stops it short of the modelled travel",
+        [fx("slide", "end_stop", position=0.3, side="upper")], push(["slide"], [12.0], span=[(0.05, 0.42)]),
+        {"slide": 0.05}, rate=250, impact_speed=0.3),
+    "lid_mass_damping": lambda name, engine: Case(
+        name, engine, chest_lid(), "lid pushed open and let fall: heavier than modelled, damped hinge",
+        [fx("lid_hinge", "mass_scale", scale=1.3), fx("lid_hinge", "viscous_damping", damping=0.2)],
+        push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6}),
+    "lid_spring_damping": lambda name, engine: Case(
+        name, engine, lid(0.35, 0.45, 1.2), "counterbalanced lid (spring) with a damper, pushed",
+        [fx("lid_hinge", "spring", stiffness=1.2, rest_position=1.6),
+         fx("lid_hinge", "viscous_damping", damping=0.15)], push(["lid_hinge"], [1.5]), {"lid_hinge": 0.8}),
+    "double_pendulum_elbow_damping": lambda name, engine: Case(
+        name, engine, double_pendulum(0.3, 0.6, 0.25, 0.4),
+        "double pendulum released from an angle; only the elbow is damped",
+        [fx("elbow", "viscous_damping", damping=0.01)], None, {"shoulder": 1.2, "elbow": -0.8}, rate=250),
+    "drawer_small_damping": lambda name, engine: Case(
+        name, engine, drawer(0.45, 0.5, 0.15, 4.0, 0.45),
+        "drawer pushed and released; SMALL but real viscous damping (time constant 5 s), at the edge",
+        [fx("slide", "viscous_damping", damping=0.8)], push(["slide"], [10.0]), {"slide": 0.1}, duration=10.0),
+    "none_door_pushes": lambda name, engine: Case(
+        name, engine, cabinet_door(),
+        "NOTHING missing: cabinet door pushed toward random targets (the span reaches past both stops) and released",
+        [], push(["hinge"], [2.0], span=[(-0.8, 2.8)]), {"hinge": 0.3}, effort_noise=0.01),
+    "none_double_pendulum": lambda name, engine: Case(
+        name, engine, double_pendulum(0.3, 0.6, 0.25, 0.4), "NOTHING missing: double pendulum released", [], None,
+        {"shoulder": 1.0, "elbow": 0.5}, rate=250),
+    "none_lid_pose": lambda name, engine: Case(
+        name, engine, chest_lid(),
+        "NOTHING missing: lid pushed and dropped onto its stop, tracked by its link pose; jittered sample times, "
+        "dropouts", [], push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6},
+        observe="pose", jitter=True, dropouts=0.02, effort_noise=0.01),
+}
+
+
+def engine_case(prefix, engine, key, **changes):
+    """The shared case ENGINE_CASES[key] of an engine suite: named <prefix>_<key>, simulated by `engine` (a key of
+    SIMULATORS), with the fields in `changes` (an engine's own description) replaced."""
+    return replace(ENGINE_CASES[key](f"{prefix}_{key}", engine), **changes)
 
 
 def push_spans(case, ex):
@@ -967,8 +1050,10 @@ def compare_dynamics(what, got, want, rtol=RIGID_RTOL):
     return err
 
 
-def measure_restitution(case, engine_mech, effect):
-    """An end stop's restitution as the engine has it: hit at `impact_speed`, gravity off."""
+def stop_hit(case, engine_mech, effect):
+    """The engine's bodies without effects, gravity off, set 0.02 before `effect`'s end stop and moving toward it at
+    the case's `impact_speed` (the other joints at q0, at rest): (sim, the joint's index, +1 toward an upper stop or
+    -1 toward a lower one)."""
     names = engine_mech.movable()
     n, sign = names.index(effect.joint), 1.0 if effect.setting["side"] == "upper" else -1.0
     q = np.array([case.q0.get(name, 0.0) for name in names])
@@ -976,6 +1061,12 @@ def measure_restitution(case, engine_mech, effect):
     q[n], qd[n] = effect.params["position"] - sign * 0.02, sign * case.impact_speed
     sim = make_sim(case, engine_mech, [], gravity=False)
     sim.set_state(q, qd)
+    return sim, n, sign
+
+
+def measure_restitution(case, engine_mech, effect):
+    """An end stop's restitution as the engine has it: hit at `impact_speed`, gravity off (stop_hit)."""
+    sim, n, sign = stop_hit(case, engine_mech, effect)
     sim.advance(400)
     out = max(0.0, -sign * float(sim.state()[1][n]) / case.impact_speed)
     sim.close()
@@ -1048,6 +1139,140 @@ def effect_shares(effects, names, traj, model, rigid=None):
         }.get(e.kind)
         if force is not None:
             out[f"{e.joint}.{e.kind}"] = sig3(rms(force()) / rms(model[:, n]))
+    return out
+
+
+# ---------------------------------------------------------------- checks of an engine suite's engine
+# (gap_suite_physx.py, gap_suite_dart.py, gap_suite_drake.py, gap_suite_newton.py: their sims, as SIMULATORS makes
+# them, have the methods of MujocoSim)
+
+
+def check_joint_frame(joint, urdf_joint):
+    """The engine's joint (of the engine's bodies) must sit where model.urdf's does: same axis and origin."""
+    if tuple(joint.axis) != tuple(urdf_joint.axis) or joint.xyz != urdf_joint.xyz or joint.rpy != urdf_joint.rpy:
+        raise SuiteError(f"joint {joint.name}: the engine's joint frame differs from model.urdf's")
+
+
+def state_box(mech, margin=0.0):
+    """Random states are drawn within the limits (`margin` inside), or within +-pi for a continuous joint."""
+    joints = [mech.joint(name) for name in mech.movable()]
+    return (np.array([-math.pi if j.lower is None else j.lower + margin for j in joints]),
+            np.array([math.pi if j.upper is None else j.upper - margin for j in joints]))
+
+
+def random_speeds(rng, n, speed=None):
+    """n joint speeds: of random sign and a size uniform within `speed` (low, high), or standard normal where speed
+    is None."""
+    if speed is None:
+        return rng.normal(0.0, 1.0, n)
+    return rng.choice([-1.0, 1.0], n) * rng.uniform(*speed, n)
+
+
+def check_engine_rigid(case, engine_mech, nominal, rng, engine, measures, pose_tol, speed=None, margin=0.0):
+    """An engine's bodies (`engine` names it in messages) against model.urdf as MuJoCo reads it (`nominal`) and, for a
+    heavier link, the engine's bodies against MuJoCo's model of them, at 3 random states each (state_box with
+    `margin`, random_speeds with `speed`): the joint-space inertia and bias of each of `measures`, (what,
+    dynamics(sim, q, qd), rtol), by compare_dynamics, and every link's pose to pose_tol (a quaternion q and -q are
+    one turn). Returns the worst relative inertia/bias error of each measure."""
+    pairs = [(case.mech, nominal)]
+    if any(e.kind == "mass_scale" for e in case.effects):
+        pairs.append((engine_mech, MujocoSim(mujoco_model(engine_mech, []), engine_mech.movable())))
+    worst = [0.0] * len(measures)
+    for mech, reference in pairs:
+        sim = make_sim(case, mech, [])
+        lo, hi = state_box(mech, margin)
+        for _ in range(3):
+            q, qd = rng.uniform(lo, hi), random_speeds(rng, len(lo), speed)
+            want = reference.dynamics(q, qd)
+            worst = [max(err, compare_dynamics(f"{case.name} ({what})", dynamics(sim, q, qd), want, rtol))
+                     for err, (what, dynamics, rtol) in zip(worst, measures)]
+            sim.set_state(q, qd)
+            reference.set_state(q, qd)
+            for link in (joint.child for joint in mech.joints):
+                got, want_pose = sim.pose(link), reference.pose(link)
+                turn = min(np.abs(got[3:] - want_pose[3:]).max(), np.abs(got[3:] + want_pose[3:]).max())
+                err = max(np.abs(got[:3] - want_pose[:3]).max(), turn)
+                if err > pose_tol:
+                    raise SuiteError(f"{case.name}: {engine} puts link {link} {err:.1e} away from model.urdf")
+        sim.close()
+    return worst
+
+
+def probe_step_dynamics(sim, q, qd, probe, read_back=False, check=None):
+    """Joint-space inertia M and bias force as one step of `sim` has them, with everything the step adds: the
+    velocity change of one step from (q, qd) with zero effort and with an effort on each joint of `probe` times its
+    inertia (sim.dynamics at rest: about `probe` of acceleration), M = diag(probe I) (A - a0)^-1, bias -M a0. The
+    velocity before the step is qd, or as sim.state() reads it back (`read_back`); `check(velocity)` may raise at the
+    velocity after each step. Leaves the last effort held: the caller restores its own."""
+    inertia = np.diag(sim.dynamics(q, np.zeros(len(q)))[0])
+    acc = []
+    for effort in np.vstack([np.zeros(len(q)), np.diag(probe * inertia)]):
+        sim.set_state(q, qd)
+        before = sim.state()[1] if read_back else np.asarray(qd, float)
+        sim.hold(effort)
+        sim.advance(1)
+        after = sim.state()[1]
+        if check is not None:
+            check(after)
+        acc.append((after - before) / DT)
+    full = np.diag(probe * inertia) @ np.linalg.inv(np.column_stack([a - acc[0] for a in acc[1:]]))
+    return full, -full @ acc[0]
+
+
+def measure_engine_effects(case, engine_mech, rng, engine, dynamics, expected, rtol, floor_rtol, speed=None,
+                           margin=0.0, was="{:.6g} was expected"):
+    """The efforts of damping, springs and friction and the added inertia as an engine (`engine` names it in
+    messages) applies them, one step from 8 random states (state_box with `margin`, random_speeds with `speed`): the
+    difference of `dynamics(sim, q, qd)` (inertia, bias) with and without the case's effects, fitted per joint by
+    -b qd - f sign(qd) - k (q - r) and an added diagonal inertia. Raises unless the damping and the added inertia
+    match `expected(joint_params)` ({"damping": (value, tol), "armature": (value, tol)}), friction and stiffness the
+    values set to rtol and the rest position to 1e-3 (no tolerance under floor_rtol of the largest inertia or bias
+    entry), and joints without effects get under rtol of the others' efforts and inertia (plus that floor). `was`
+    words the expected value in the message. Returns the fits per joint with effects:
+    {joint: {"damping", "armature" (all the added inertia)[, "friction"][, "stiffness", "rest_position"]}}."""
+    names = engine_mech.movable()
+    bare, full = make_sim(case, engine_mech, []), make_sim(case, engine_mech, case.effects)
+    lo, hi = state_box(engine_mech, margin)
+    q, qd, effort, added, scale = [], [], [], [], 0.0
+    for _ in range(8):
+        q.append(rng.uniform(lo, hi))
+        qd.append(random_speeds(rng, len(names), speed))
+        (m0, b0), (m1, b1) = dynamics(bare, q[-1], qd[-1]), dynamics(full, q[-1], qd[-1])
+        effort.append(b0 - b1)
+        added.append(np.diag(m1 - m0))
+        scale = max(scale, np.abs(m0).max(), np.abs(b0).max())
+    bare.close()
+    full.close()
+    q, qd, effort, added = (np.array(x) for x in (q, qd, effort, added))
+    floor = floor_rtol * scale
+    out = {}
+    for n, name in enumerate(names):
+        p = joint_params(case.effects, name)
+        if not (p["stiffness"] or p["damping"] or p["friction"] or p["armature"]):
+            if (np.abs(effort[:, n]).max() > rtol * np.abs(effort).max() + floor or
+                    np.abs(added[:, n]).max() > rtol * np.abs(added).max() + floor):
+                raise SuiteError(f"{case.name}: {engine} adds an effort or inertia on {name}, which has no effect")
+            continue
+        columns, keys = [-qd[:, n]], ["damping"]
+        if p["friction"]:
+            columns.append(-np.sign(qd[:, n]))
+            keys.append("friction")
+        if p["stiffness"]:
+            columns += [-q[:, n], np.ones(len(q))]
+            keys += ["stiffness", "k_rest"]
+        fit = dict(zip(keys, np.linalg.lstsq(np.column_stack(columns), effort[:, n], rcond=None)[0]))
+        got = {"damping": fit["damping"], "armature": float(np.mean(added[:, n]))}
+        want = expected(p)
+        if p["friction"]:
+            got["friction"] = fit["friction"]
+            want["friction"] = (p["friction"], rtol * p["friction"])
+        if p["stiffness"]:
+            got.update(stiffness=fit["stiffness"], rest_position=fit["k_rest"] / fit["stiffness"])
+            want.update(stiffness=(p["stiffness"], rtol * p["stiffness"]), rest_position=(p["springref"], 1e-3))
+        for key, (value, tol) in want.items():
+            if abs(got[key] - value) > max(tol, floor):
+                raise SuiteError(f"{case.name}: {engine} applies {key} {got[key]:.6g} on {name}, {was.format(value)}")
+        out[name] = {key: float(f"{value:.4g}") for key, value in got.items()}
     return out
 
 
@@ -1192,10 +1417,10 @@ def run_case(case, seed, out):
 
 def run_engine_case(case, seed, out, engine, checks, make_sim):
     """Simulates one case with an engine and writes DIR/<case>/{model.urdf, recording.csv, truth.json}
-    (this suite's engines and those of gap_suite_physx.py, gap_suite_dart.py, gap_suite_drake.py): `checks` holds
-    the engine's check_rigid(case, engine_mech, nominal, rng), measure_effects(case, engine_mech, rng),
-    effect_detail(case, effect, engine_mech, measured) and engine_text(rigid_err); `make_sim(engine_mech)`
-    builds the engine's simulation of the case."""
+    (this suite's engines and those of gap_suite_physx.py, gap_suite_dart.py, gap_suite_drake.py,
+    gap_suite_newton.py): `checks` holds the engine's check_rigid(case, engine_mech, nominal, rng),
+    measure_effects(case, engine_mech, rng), effect_detail(case, effect, engine_mech, measured) and
+    engine_text(rigid_err); `make_sim(engine_mech)` builds the engine's simulation of the case."""
     check_rigid, measure_effects, effect_detail, engine_text = checks
     rng = case_rng(seed, case.name)
     names = case.mech.movable()
@@ -1720,9 +1945,9 @@ class ArmRun:
 
 
 def engine_suite_main(cases, run_case, checks=()):
-    """The command line of an engine's suite of its own (gap_suite_physx.py, gap_suite_dart.py, gap_suite_drake.py):
-    --out, --seed, --only over `cases()`; each (kind, check) in `checks` runs once before the cases
-    when a chosen case has an effect of that kind; `run_case(case, seed, out)` writes a case."""
+    """The command line of an engine's suite of its own (gap_suite_physx.py, gap_suite_dart.py, gap_suite_drake.py,
+    gap_suite_newton.py): --out, --seed, --only over `cases()`; each (kind, check) in `checks` runs once before the
+    cases when a chosen case has an effect of that kind; `run_case(case, seed, out)` writes a case."""
     parser = argparse.ArgumentParser(description=sys.modules["__main__"].__doc__.split("\n\n")[0])
     parser.add_argument("--out", required=True, help="folder to write DIR/<case>/ into")
     parser.add_argument("--seed", type=int, default=0)

@@ -63,15 +63,15 @@ default_rng([seed, crc32(name)])):
                                        pose; jittered sample times, dropouts
 """
 
-import math
+import functools
 
 import dartpy
 import mujoco
 import numpy as np
 
 import gap_suite as gs
-from gap_suite import (DT, GRAVITY, Case, MujocoSim, SuiteError, compare_dynamics, door, double_pendulum, drawer, fx,
-                       joint_params, lid, measure_restitution, mujoco_model, push, sash, sines, urdf_text)
+from gap_suite import (DT, GRAVITY, Case, SuiteError, cabinet_door, chest_lid, door, double_pendulum, drawer, fx,
+                       joint_params, push, urdf_text, wardrobe_door)
 
 ENGINE = f"dart {dartpy.__version__}"
 DART_RTOL = 1e-9  # inertia and bias against MuJoCo, relative to the largest entry (both compute in double)
@@ -139,8 +139,7 @@ class DartSim:
             raise SuiteError(f"DART has no one-dof joint {joint.name}")
         if p["armature"]:
             raise SuiteError(f"joint {joint.name}: DART 6 joints have no armature")
-        if tuple(joint.axis) != tuple(urdf_joint.axis) or joint.xyz != urdf_joint.xyz or joint.rpy != urdf_joint.rpy:
-            raise SuiteError(f"joint {joint.name}: the engine's joint frame differs from model.urdf's")
+        gs.check_joint_frame(joint, urdf_joint)
         if joint.lower is not None:
             if joint.lower != urdf_joint.lower:
                 dart_joint.setPositionLowerLimit(0, joint.lower)
@@ -191,24 +190,18 @@ class DartSim:
         """Joint-space inertia and bias force as one World.step has them, with everything the step adds (implicit
         damping and spring, the friction impulse): the velocity change of one step from (q, qd) with zero effort
         and with a small effort on each joint (PROBE of acceleration), limits not enforced meanwhile. Raises where
-        a joint's velocity changes sign within the step (friction would not slide)."""
-        for joint in self.limited:
-            joint.setLimitEnforcement(False)
-        inertia = np.diag(self.dynamics(q, np.zeros(len(q)))[0])
-        acc = []
-        for effort in np.vstack([np.zeros(len(q)), np.diag(PROBE * inertia)]):
-            self.set_state(q, qd)
-            self.hold(effort)
-            self.advance(1)
-            after = self.state()[1]
+        a joint's velocity changes sign within the step (friction would not slide). (gap_suite.probe_step_dynamics)"""
+        def slides(after):
             if np.any(np.sign(after) != np.sign(qd)):
                 raise SuiteError("a joint's velocity changed sign within the measuring step")
-            acc.append((after - np.asarray(qd, float)) / DT)
+
+        for joint in self.limited:
+            joint.setLimitEnforcement(False)
+        out = gs.probe_step_dynamics(self, q, qd, PROBE, check=slides)
         for joint in self.limited:
             joint.setLimitEnforcement(True)
         self.hold(np.zeros(len(q)))
-        full = np.diag(PROBE * inertia) @ np.linalg.inv(np.column_stack([a - acc[0] for a in acc[1:]]))
-        return full, -full @ acc[0]
+        return out
 
     def close(self):
         self.world.removeAllSkeletons()
@@ -221,43 +214,13 @@ gs.SIMULATORS["dart"] = lambda case, mech, effects, gravity: DartSim(mech, effec
 # ---------------------------------------------------------------- checks
 
 
-def state_box(mech):
-    """Random states are drawn within the limits, or within +-pi for a continuous joint."""
-    joints = [mech.joint(name) for name in mech.movable()]
-    return (np.array([-math.pi if j.lower is None else j.lower for j in joints]),
-            np.array([math.pi if j.upper is None else j.upper for j in joints]))
-
-
-def random_speeds(rng, n):
-    return rng.choice([-1.0, 1.0], n) * rng.uniform(*SPEED, n)
-
-
 def check_rigid(case, engine_mech, nominal, rng):
     """DART's bodies against model.urdf as MuJoCo reads it (and, for a heavier link, the engine's bodies against
     MuJoCo's model of them): inertia and bias from the Skeleton and from one step, link poses, at 3 random states.
-    Returns the worst relative inertia/bias error."""
-    pairs = [(case.mech, nominal)]
-    if any(e.kind == "mass_scale" for e in case.effects):
-        pairs.append((engine_mech, MujocoSim(mujoco_model(engine_mech, []), engine_mech.movable())))
-    worst = 0.0
-    for mech, reference in pairs:
-        sim = DartSim(mech, [], model=case.mech)
-        lo, hi = state_box(mech)
-        for _ in range(3):
-            q, qd = rng.uniform(lo, hi), random_speeds(rng, len(lo))
-            want = reference.dynamics(q, qd)
-            worst = max(worst, compare_dynamics(f"{case.name} (DART Skeleton)", sim.dynamics(q, qd), want, DART_RTOL),
-                        compare_dynamics(f"{case.name} (DART step)", sim.step_dynamics(q, qd), want, DART_RTOL))
-            sim.set_state(q, qd)
-            reference.set_state(q, qd)
-            for link in (joint.child for joint in mech.joints):
-                got, want_pose = sim.pose(link), reference.pose(link)
-                turn = min(np.abs(got[3:] - want_pose[3:]).max(), np.abs(got[3:] + want_pose[3:]).max())
-                err = max(np.abs(got[:3] - want_pose[:3]).max(), turn)
-                if err > POSE_TOL:
-                    raise SuiteError(f"{case.name}: DART puts link {link} {err:.1e} away from model.urdf")
-        sim.close()
-    return worst
+    Returns the worst relative inertia/bias error (gap_suite.check_engine_rigid)."""
+    return max(gs.check_engine_rigid(case, engine_mech, nominal, rng, "DART",
+                                     [("DART Skeleton", DartSim.dynamics, DART_RTOL),
+                                      ("DART step", DartSim.step_dynamics, DART_RTOL)], POSE_TOL, speed=SPEED))
 
 
 def measure_effects(case, engine_mech, rng):
@@ -266,53 +229,13 @@ def measure_effects(case, engine_mech, rng):
     -b qd - f sign(qd) - k (q - r) and an added diagonal inertia. DART's damping and spring are implicit,
     -b qd(t+dt) - k (q(t+dt) - r): they show as b + k*DT of damping and b*DT + k*DT^2 of inertia. Raises unless the
     fits match the values set (with that) to EFFECT_RTOL, the rest position to 1e-3, and joints without effects get
-    under EFFECT_RTOL of the others'. Returns the fits per joint with effects."""
-    names = engine_mech.movable()
-    bare, full = DartSim(engine_mech, [], model=case.mech), DartSim(engine_mech, case.effects, model=case.mech)
-    lo, hi = state_box(engine_mech)
-    q, qd, effort, added, scale = [], [], [], [], 0.0
-    for _ in range(8):
-        q.append(rng.uniform(lo, hi))
-        qd.append(random_speeds(rng, len(names)))
-        (m0, b0), (m1, b1) = bare.step_dynamics(q[-1], qd[-1]), full.step_dynamics(q[-1], qd[-1])
-        effort.append(b0 - b1)
-        added.append(np.diag(m1 - m0))
-        scale = max(scale, np.abs(m0).max(), np.abs(b0).max())
-    bare.close()
-    full.close()
-    q, qd, effort, added = (np.array(x) for x in (q, qd, effort, added))
-    floor = 1e-8 * scale
-    out = {}
-    for n, name in enumerate(names):
-        p = joint_params(case.effects, name)
-        if not (p["stiffness"] or p["damping"] or p["friction"]):
-            if (np.abs(effort[:, n]).max() > EFFECT_RTOL * np.abs(effort).max() + floor or
-                    np.abs(added[:, n]).max() > EFFECT_RTOL * np.abs(added).max() + floor):
-                raise SuiteError(f"{case.name}: DART adds an effort or inertia on {name}, which has no effect")
-            continue
-        columns, keys = [-qd[:, n]], ["damping"]
-        if p["friction"]:
-            columns.append(-np.sign(qd[:, n]))
-            keys.append("friction")
-        if p["stiffness"]:
-            columns += [-q[:, n], np.ones(len(q))]
-            keys += ["stiffness", "k_rest"]
-        fit = dict(zip(keys, np.linalg.lstsq(np.column_stack(columns), effort[:, n], rcond=None)[0]))
-        got = {"damping": fit["damping"], "armature": float(np.mean(added[:, n]))}
+    under EFFECT_RTOL of the others'. Returns the fits per joint with effects (gap_suite.measure_engine_effects)."""
+    def expected(p):
         implicit_b, implicit_i = p["damping"] + p["stiffness"] * DT, p["damping"] * DT + p["stiffness"] * DT ** 2
-        want = {"damping": (implicit_b, EFFECT_RTOL * implicit_b),
-                "armature": (implicit_i, EFFECT_RTOL * implicit_i)}
-        if p["friction"]:
-            got["friction"] = fit["friction"]
-            want["friction"] = (p["friction"], EFFECT_RTOL * p["friction"])
-        if p["stiffness"]:
-            got.update(stiffness=fit["stiffness"], rest_position=fit["k_rest"] / fit["stiffness"])
-            want.update(stiffness=(p["stiffness"], EFFECT_RTOL * p["stiffness"]), rest_position=(p["springref"], 1e-3))
-        for key, (value, tol) in want.items():
-            if abs(got[key] - value) > max(tol, floor):
-                raise SuiteError(f"{case.name}: DART applies {key} {got[key]:.6g} on {name}, {value:.6g} was expected")
-        out[name] = {key: float(f"{value:.4g}") for key, value in got.items()}
-    return out
+        return {"damping": (implicit_b, EFFECT_RTOL * implicit_b), "armature": (implicit_i, EFFECT_RTOL * implicit_i)}
+
+    return gs.measure_engine_effects(case, engine_mech, rng, "DART", DartSim.step_dynamics, expected, EFFECT_RTOL,
+                                     1e-8, speed=SPEED)
 
 
 def check_joint_damping():
@@ -332,9 +255,11 @@ def check_coulomb_friction():
         sim.advance(1000)
         (q,), (qd,) = sim.state()
         if expected == 0.0 and max(abs(q), abs(qd)) > 1e-9:
-            raise SuiteError(f"DART Coulomb friction 0.5 does not hold the door under {effort}: q {q}, qd {qd} after 1 s")
+            raise SuiteError(f"DART Coulomb friction 0.5 does not hold the door under {effort}: q {q}, qd {qd} "
+                             "after 1 s")
         if expected and abs(qd - expected) > EFFECT_RTOL * expected:
-            raise SuiteError(f"DART Coulomb friction does not act as f*sign(qd): {qd} rad/s after 1 s, expected {expected}")
+            raise SuiteError(f"DART Coulomb friction does not act as f*sign(qd): {qd} rad/s after 1 s, "
+                             f"expected {expected}")
     sim.close()
 
 
@@ -342,46 +267,34 @@ def check_coulomb_friction():
 
 
 def cases():
-    door_s = lambda: door(0.45, 0.7, 2.0)  # noqa: E731  I = 0.135 kg m^2
-    door_l = lambda: door(0.6, 1.9, 8.0)  # noqa: E731  I = 0.96 kg m^2
-    lid_m = lambda: lid(0.4, 0.5, 1.5)  # noqa: E731  I = 0.08 kg m^2, 2.9 N m of weight
+    shared = functools.partial(gs.engine_case, "dart", "dart")  # gap_suite.ENGINE_CASES, named dart_<key>
     return [
-        Case("dart_door_friction", "dart", door_l(), "heavy wardrobe door pushed and released; dry hinge friction",
-             [fx("hinge", "coulomb_friction", friction=1.0)], push(["hinge"], [5.0]), {"hinge": 0.4}, effort_noise=0.01),
-        Case("dart_drawer_friction", "dart", drawer(0.5, 0.55, 0.2, 6.0, 0.45), "loaded drawer pushed and released; dry "
-             "runners", [fx("slide", "coulomb_friction", friction=6.0)], push(["slide"], [30.0]), {"slide": 0.1}, rate=250),
-        Case("dart_door_damping", "dart", door_s(), "cabinet door pushed and released; the hinge is viscously damped",
-             [fx("hinge", "viscous_damping", damping=0.25)], push(["hinge"], [1.5]), {"hinge": 0.3}),
-        Case("dart_flap_spring", "dart", door(0.25, 0.3, 0.4), "light flap on a vertical hinge with a return spring, pushed",
-             [fx("hinge", "spring", stiffness=0.15, rest_position=1.0)], push(["hinge"], [0.2]), {"hinge": 0.1},
-             duration=6.0, rate=250),
-        Case("dart_sash_mass_scale", "dart", sash(0.8, 0.6, 5.0, 0.5), "window sash lifted by a multisine; heavier than "
-             "modelled", [fx("sash", "mass_scale", scale=1.3)], sines(["sash"], [30.0], [0.25]), {"sash": 0.25},
+        Case("dart_door_friction", "dart", wardrobe_door(),
+             "heavy wardrobe door pushed and released; dry hinge friction",
+             [fx("hinge", "coulomb_friction", friction=1.0)], push(["hinge"], [5.0]), {"hinge": 0.4},
              effort_noise=0.01),
-        Case("dart_drawer_end_stop", "dart", drawer(0.45, 0.5, 0.15, 4.0, 0.45),
-             "drawer pushed open and shut; a stop inside stops it short of the modelled travel",
-             [fx("slide", "end_stop", position=0.3, side="upper")], push(["slide"], [12.0], span=[(0.05, 0.42)]),
-             {"slide": 0.05}, rate=250, impact_speed=0.3),
-        Case("dart_door_friction_damping", "dart", door_s(), "cabinet door, pushed: dry friction and viscous damping",
+        Case("dart_drawer_friction", "dart", drawer(0.5, 0.55, 0.2, 6.0, 0.45),
+             "loaded drawer pushed and released; dry runners",
+             [fx("slide", "coulomb_friction", friction=6.0)], push(["slide"], [30.0]), {"slide": 0.1}, rate=250),
+        shared("door_damping"),
+        shared("flap_spring"),
+        shared("sash_mass_scale"),
+        shared("drawer_end_stop"),
+        Case("dart_door_friction_damping", "dart", cabinet_door(),
+             "cabinet door, pushed: dry friction and viscous damping",
              [fx("hinge", "coulomb_friction", friction=0.2), fx("hinge", "viscous_damping", damping=0.15)],
              push(["hinge"], [1.5]), {"hinge": 0.3}),
-        Case("dart_lid_spring_damping", "dart", lid(0.35, 0.45, 1.2), "counterbalanced lid (spring) with a damper, pushed",
-             [fx("lid_hinge", "spring", stiffness=1.2, rest_position=1.6), fx("lid_hinge", "viscous_damping", damping=0.15)],
-             push(["lid_hinge"], [1.5]), {"lid_hinge": 0.8}),
-        Case("dart_lid_mass_friction", "dart", lid_m(), "lid pushed open and let fall: heavier than modelled, dry hinge",
+        shared("lid_spring_damping"),
+        Case("dart_lid_mass_friction", "dart", chest_lid(),
+             "lid pushed open and let fall: heavier than modelled, dry hinge",
              [fx("lid_hinge", "mass_scale", scale=1.3), fx("lid_hinge", "coulomb_friction", friction=0.6)],
              push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6}),
         Case("dart_double_pendulum_elbow_friction", "dart", double_pendulum(0.3, 0.6, 0.25, 0.4),
              "double pendulum released from an angle; dry friction at the elbow only",
              [fx("elbow", "coulomb_friction", friction=0.05)], None, {"shoulder": 1.2, "elbow": -0.8}, rate=250),
-        Case("dart_none_door_pushes", "dart", door_s(), "NOTHING missing: cabinet door pushed toward random targets (the "
-             "span reaches past both stops) and released", [], push(["hinge"], [2.0], span=[(-0.8, 2.8)]), {"hinge": 0.3},
-             effort_noise=0.01),
-        Case("dart_none_double_pendulum", "dart", double_pendulum(0.3, 0.6, 0.25, 0.4),
-             "NOTHING missing: double pendulum released", [], None, {"shoulder": 1.0, "elbow": 0.5}, rate=250),
-        Case("dart_none_lid_pose", "dart", lid_m(), "NOTHING missing: lid pushed and dropped onto its stop, tracked by its "
-             "link pose; jittered sample times, dropouts", [], push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6},
-             observe="pose", jitter=True, dropouts=0.02, effort_noise=0.01),
+        shared("none_door_pushes"),
+        shared("none_double_pendulum"),
+        shared("none_lid_pose"),
     ]
 
 
@@ -394,12 +307,12 @@ def effect_detail(case, effect, engine_mech, measured):
     joint = engine_mech.joint(effect.joint)
     step = "measured over one step at 8 random states (speeds 0.5-1.5)"
     if kind == "coulomb_friction":
-        return (f"DART DegreeOfFreedom.setCoulombFriction({p['friction']}): JointCoulombFrictionConstraint, a boxed-LCP "
-                f"impulse bounded by friction*dt that drives the joint's velocity to zero (sticks exactly); {step} as "
-                f"-{got['friction']:g}*sign(qd)")
+        return (f"DART DegreeOfFreedom.setCoulombFriction({p['friction']}): JointCoulombFrictionConstraint, a "
+                f"boxed-LCP impulse bounded by friction*dt that drives the joint's velocity to zero (sticks exactly); "
+                f"{step} as -{got['friction']:g}*sign(qd)")
     if kind == "viscous_damping":
-        return (f"DART DegreeOfFreedom.setDampingCoefficient({p['damping']}), implicit in the step (-b*qd(t+dt)); {step} "
-                f"as -{got['damping']:g}*qd with {got['armature']:.3g} of apparent inertia (b*dt)")
+        return (f"DART DegreeOfFreedom.setDampingCoefficient({p['damping']}), implicit in the step (-b*qd(t+dt)); "
+                f"{step} as -{got['damping']:g}*qd with {got['armature']:.3g} of apparent inertia (b*dt)")
     if kind == "spring":
         return (f"DART DegreeOfFreedom.setSpringStiffness({p['stiffness']}) and setRestPosition({p['rest_position']}), "
                 f"implicit in the step (-k*(q(t+dt) - r)); {step} as -{got['stiffness']:g}*(q - "
@@ -408,19 +321,19 @@ def effect_detail(case, effect, engine_mech, measured):
         return (f"DART BodyNode {joint.child}: setMass and setMomentOfInertia x{p['scale']} after loading model.urdf; "
                 f"inertia and bias checked against MuJoCo's model of the heavier link to {DART_RTOL:g}")
     return (f"DART Joint.setPosition{effect.setting['side'].capitalize()}Limit({p['position']}) instead of "
-            "model.urdf's, setLimitEnforcement(True): DART's JointConstraint, a hard inelastic impulse (velocity clipped "
-            "so that the next position stays inside, no restitution parameter); restitution measured in the engine "
-            f"hitting it at {case.impact_speed} per second, gravity off")
+            "model.urdf's, setLimitEnforcement(True): DART's JointConstraint, a hard inelastic impulse (velocity "
+            "clipped so that the next position stays inside, no restitution parameter); restitution measured in the "
+            f"engine hitting it at {case.impact_speed} per second, gravity off")
 
 
 def engine_text(rigid_err):
     return (f"{ENGINE}: model.urdf read by dartpy.utils.DartLoader (root link welded to the world, no collision "
             f"shapes), its own World: gravity {GRAVITY[2]} z, {DT} s steps (semi-implicit Euler), default boxed-LCP "
-            "constraint solver (Dantzig, PGS fallback), deactivation (sleeping) off; efforts through Skeleton.setForces "
-            "before every step, held between samples; model.urdf's joint limits enforced (setLimitEnforcement(True)): "
-            "hard inelastic JointConstraint; URDF velocity and effort limits as loaded. Rigid bodies checked against "
-            "model.urdf as MuJoCo reads it (getMassMatrix / getCoriolisAndGravityForces and one-step accelerations, "
-            f"link poses): {rigid_err:.1e} relative")
+            "constraint solver (Dantzig, PGS fallback), deactivation (sleeping) off; efforts through "
+            "Skeleton.setForces before every step, held between samples; model.urdf's joint limits enforced "
+            "(setLimitEnforcement(True)): hard inelastic JointConstraint; URDF velocity and effort limits as loaded. "
+            "Rigid bodies checked against model.urdf as MuJoCo reads it (getMassMatrix / getCoriolisAndGravityForces "
+            f"and one-step accelerations, link poses): {rigid_err:.1e} relative")
 
 
 def run_case(case, seed, out):
@@ -430,7 +343,8 @@ def run_case(case, seed, out):
 
 
 def main():
-    gs.engine_suite_main(cases, run_case, [("viscous_damping", check_joint_damping), ("coulomb_friction", check_coulomb_friction)])
+    gs.engine_suite_main(cases, run_case, [("viscous_damping", check_joint_damping),
+                                           ("coulomb_friction", check_coulomb_friction)])
 
 
 if __name__ == "__main__":

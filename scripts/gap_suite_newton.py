@@ -87,14 +87,13 @@ default_rng([seed, crc32(name)])):
                                         pose; jittered sample times, dropouts
 """
 
-import math
+import functools
 
 import numpy as np
 import warp as wp
 
 import gap_suite as gs
-from gap_suite import (DT, GRAVITY, Case, MujocoSim, SuiteError, compare_dynamics, door, double_pendulum, drawer, fx,
-                       joint_params, knob, lid, mujoco_model, pendulum, push, sash, sines, urdf_text)
+from gap_suite import DT, GRAVITY, Case, SuiteError, door, fx, joint_params, push, urdf_text
 
 wp.config.log_level = wp.LOG_WARNING  # no initialisation or kernel-module load lines among the summary lines
 import newton  # noqa: E402  (after Warp is quietened)
@@ -172,8 +171,7 @@ class NewtonSim:
         q, v = builder.joint_q_start[index], builder.joint_qd_start[index]
         if p["friction"]:
             raise SuiteError(f"joint {joint.name}: SolverFeatherstone has no joint friction")
-        if tuple(joint.axis) != tuple(urdf_joint.axis) or joint.xyz != urdf_joint.xyz or joint.rpy != urdf_joint.rpy:
-            raise SuiteError(f"joint {joint.name}: the engine's joint frame differs from model.urdf's")
+        gs.check_joint_frame(joint, urdf_joint)
         if joint.lower is not None:
             builder.joint_limit_lower[v], builder.joint_limit_upper[v] = joint.lower, joint.upper
         builder.joint_damping[v] = joint.damping + p["damping"]
@@ -222,19 +220,11 @@ class NewtonSim:
         """Joint-space inertia and bias force as one SolverFeatherstone step has them, with everything the step adds
         (damping, springs, armature): the velocity change of one step from (q, qd) with zero effort and with a small
         effort on each joint (PROBE of acceleration). Inside the limits the penalty limit adds nothing. The velocity
-        before the step is read back as the float32 state holds it."""
+        before the step is read back as the float32 state holds it. (gap_suite.probe_step_dynamics)"""
         held = self.effort
-        inertia = np.diag(self.dynamics(q, np.zeros(len(q)))[0])
-        acc = []
-        for effort in np.vstack([np.zeros(len(q)), np.diag(PROBE * inertia)]):
-            self.set_state(q, qd)
-            before = self.state()[1]
-            self.hold(effort)
-            self.advance(1)
-            acc.append((self.state()[1] - before) / DT)
+        out = gs.probe_step_dynamics(self, q, qd, PROBE, read_back=True)
         self.hold(held)
-        full = np.diag(PROBE * inertia) @ np.linalg.inv(np.column_stack([a - acc[0] for a in acc[1:]]))
-        return full, -full @ acc[0]
+        return out
 
     def close(self):
         self.model = self.solver = self.current = self.spare = self.control = None
@@ -246,45 +236,13 @@ gs.SIMULATORS["newton"] = lambda case, mech, effects, gravity: NewtonSim(mech, e
 # ---------------------------------------------------------------- checks
 
 
-def state_box(mech):
-    """Random states are drawn within the limits, or within +-pi for a continuous joint."""
-    joints = [mech.joint(name) for name in mech.movable()]
-    return (np.array([-math.pi if j.lower is None else j.lower for j in joints]),
-            np.array([math.pi if j.upper is None else j.upper for j in joints]))
-
-
-def random_speeds(rng, n):
-    return rng.choice([-1.0, 1.0], n) * rng.uniform(*SPEED, n)
-
-
 def check_rigid(case, engine_mech, nominal, rng):
     """Newton's bodies against model.urdf as MuJoCo reads it (and, for a heavier link, the engine's bodies against
     MuJoCo's model of them): inertia and bias from eval_inverse_dynamics_passive and from one step, link poses, at 3
-    random states. Returns the worst relative inertia/bias errors (functions, step)."""
-    pairs = [(case.mech, nominal)]
-    if any(e.kind == "mass_scale" for e in case.effects):
-        pairs.append((engine_mech, MujocoSim(mujoco_model(engine_mech, []), engine_mech.movable())))
-    worst = [0.0, 0.0]
-    for mech, reference in pairs:
-        sim = NewtonSim(mech, [], model=case.mech)
-        lo, hi = state_box(mech)
-        for _ in range(3):
-            q, qd = rng.uniform(lo, hi), random_speeds(rng, len(lo))
-            want = reference.dynamics(q, qd)
-            worst = [max(worst[0], compare_dynamics(f"{case.name} (Newton functions)", sim.dynamics(q, qd), want,
-                                                    NEWTON_RTOL)),
-                     max(worst[1], compare_dynamics(f"{case.name} (Newton step)", sim.step_dynamics(q, qd), want,
-                                                    STEP_RTOL))]
-            sim.set_state(q, qd)
-            reference.set_state(q, qd)
-            for link in (joint.child for joint in mech.joints):
-                got, want_pose = sim.pose(link), reference.pose(link)
-                turn = min(np.abs(got[3:] - want_pose[3:]).max(), np.abs(got[3:] + want_pose[3:]).max())
-                err = max(np.abs(got[:3] - want_pose[:3]).max(), turn)
-                if err > POSE_TOL:
-                    raise SuiteError(f"{case.name}: Newton puts link {link} {err:.1e} away from model.urdf")
-        sim.close()
-    return worst
+    random states. Returns the worst relative inertia/bias errors (functions, step) (gap_suite.check_engine_rigid)."""
+    return gs.check_engine_rigid(case, engine_mech, nominal, rng, "Newton",
+                                 [("Newton functions", NewtonSim.dynamics, NEWTON_RTOL),
+                                  ("Newton step", NewtonSim.step_dynamics, STEP_RTOL)], POSE_TOL, speed=SPEED)
 
 
 def measure_effects(case, engine_mech, rng):
@@ -293,47 +251,14 @@ def measure_effects(case, engine_mech, rng):
     -b qd - k (q - r) and an added diagonal inertia. Everything is explicit, -b qd(t) - k (q(t) - r): b of damping,
     k of stiffness, and the armature alone as added inertia. Raises unless the fits match the values set to
     EFFECT_RTOL (plus STEP_RTOL of the largest inertia or bias: float32), the rest position to 1e-3, and joints
-    without effects get under EFFECT_RTOL of the others'. Returns the fits per joint with effects."""
-    names = engine_mech.movable()
-    bare, full = NewtonSim(engine_mech, [], model=case.mech), NewtonSim(engine_mech, case.effects, model=case.mech)
-    lo, hi = state_box(engine_mech)
-    q, qd, effort, added, scale = [], [], [], [], 0.0
-    for _ in range(8):
-        q.append(rng.uniform(lo, hi))
-        qd.append(random_speeds(rng, len(names)))
-        (m0, b0), (m1, b1) = bare.step_dynamics(q[-1], qd[-1]), full.step_dynamics(q[-1], qd[-1])
-        effort.append(b0 - b1)
-        added.append(np.diag(m1 - m0))
-        scale = max(scale, np.abs(m0).max(), np.abs(b0).max())
-    bare.close()
-    full.close()
-    q, qd, effort, added = (np.array(x) for x in (q, qd, effort, added))
-    floor = STEP_RTOL * scale
-    out = {}
-    for n, name in enumerate(names):
-        p = joint_params(case.effects, name)
-        if not (p["stiffness"] or p["damping"] or p["armature"]):
-            if (np.abs(effort[:, n]).max() > EFFECT_RTOL * np.abs(effort).max() + floor or
-                    np.abs(added[:, n]).max() > EFFECT_RTOL * np.abs(added).max() + floor):
-                raise SuiteError(f"{case.name}: Newton adds an effort or inertia on {name}, which has no effect")
-            continue
-        columns, keys = [-qd[:, n]], ["damping"]
-        if p["stiffness"]:
-            columns += [-q[:, n], np.ones(len(q))]
-            keys += ["stiffness", "k_rest"]
-        fit = dict(zip(keys, np.linalg.lstsq(np.column_stack(columns), effort[:, n], rcond=None)[0]))
-        got = {"damping": fit["damping"], "armature": float(np.mean(added[:, n]))}
-        want = {"damping": (p["damping"], EFFECT_RTOL * p["damping"]),
+    without effects get under EFFECT_RTOL of the others'. Returns the fits per joint with effects
+    (gap_suite.measure_engine_effects)."""
+    def expected(p):
+        return {"damping": (p["damping"], EFFECT_RTOL * p["damping"]),
                 "armature": (p["armature"], EFFECT_RTOL * p["armature"])}
-        if p["stiffness"]:
-            got.update(stiffness=fit["stiffness"], rest_position=fit["k_rest"] / fit["stiffness"])
-            want.update(stiffness=(p["stiffness"], EFFECT_RTOL * p["stiffness"]), rest_position=(p["springref"], 1e-3))
-        for key, (value, tol) in want.items():
-            if abs(got[key] - value) > max(tol, floor):
-                raise SuiteError(f"{case.name}: Newton applies {key} {got[key]:.6g} on {name}, {value:.6g} was "
-                                 "expected")
-        out[name] = {key: float(f"{value:.4g}") for key, value in got.items()}
-    return out
+
+    return gs.measure_engine_effects(case, engine_mech, rng, "Newton", NewtonSim.step_dynamics, expected, EFFECT_RTOL,
+                                     STEP_RTOL, speed=SPEED)
 
 
 def check_joint_damping():
@@ -343,14 +268,8 @@ def check_joint_damping():
 
 def stop_contact(case, engine_mech, effect):
     """How Newton's penalty limit stops a joint that hits an end stop at the case's impact speed (gravity off): how
-    far it goes past the stop and for how many steps it is past it: (overshoot, steps)."""
-    names = engine_mech.movable()
-    n, sign = names.index(effect.joint), 1.0 if effect.setting["side"] == "upper" else -1.0
-    q = np.array([case.q0.get(name, 0.0) for name in names])
-    qd = np.zeros(len(names))
-    q[n], qd[n] = effect.params["position"] - sign * 0.02, sign * case.impact_speed
-    sim = NewtonSim(engine_mech, [], gravity=False, model=case.mech)
-    sim.set_state(q, qd)
+    far it goes past the stop and for how many steps it is past it: (overshoot, steps) (gap_suite.stop_hit)."""
+    sim, n, sign = gs.stop_hit(case, engine_mech, effect)
     past = []
     for _ in range(400):
         sim.advance(1)
@@ -364,57 +283,25 @@ def stop_contact(case, engine_mech, effect):
 
 
 def cases():
-    door_s = lambda: door(0.45, 0.7, 2.0)  # noqa: E731  I = 0.135 kg m^2
-    lid_m = lambda: lid(0.4, 0.5, 1.5)  # noqa: E731  I = 0.08 kg m^2, 2.9 N m of weight
+    shared = functools.partial(gs.engine_case, "newton", "newton")  # gap_suite.ENGINE_CASES, named newton_<key>
     return [
-        Case("newton_door_damping", "newton", door_s(),
-             "cabinet door pushed and released; the hinge is viscously damped",
-             [fx("hinge", "viscous_damping", damping=0.25)], push(["hinge"], [1.5]), {"hinge": 0.3}),
-        Case("newton_flap_spring", "newton", door(0.25, 0.3, 0.4),
-             "light flap on a vertical hinge with a return spring, pushed",
-             [fx("hinge", "spring", stiffness=0.15, rest_position=1.0)], push(["hinge"], [0.2]), {"hinge": 0.1},
-             duration=6.0, rate=250),
-        Case("newton_knob_armature", "newton", knob(0.04, 0.12), "geared knob (rotor inertia) driven by a multisine",
-             [fx("knob", "armature", armature=1.5e-4)], sines(["knob"], [2e-3], [0.0]), duration=6.0, rate=500,
-             noise=(1e-3, 3e-4)),
-        Case("newton_pendulum_armature", "newton", pendulum(0.35, 0.8, 0.04),
-             "geared pendulum pushed and released: rotor inertia (inertia without weight)",
-             [fx("pivot", "armature", armature=0.02)], push(["pivot"], [1.5]), {"pivot": 0.5}, duration=10.0),
-        Case("newton_sash_mass_scale", "newton", sash(0.8, 0.6, 5.0, 0.5),
-             "window sash lifted by a multisine; heavier than modelled",
-             [fx("sash", "mass_scale", scale=1.3)], sines(["sash"], [30.0], [0.25]), {"sash": 0.25}, effort_noise=0.01),
-        Case("newton_drawer_end_stop", "newton", drawer(0.45, 0.5, 0.15, 4.0, 0.45),
-             "drawer pushed open and shut; a stop inside stops it short of the modelled travel",
-             [fx("slide", "end_stop", position=0.3, side="upper")], push(["slide"], [12.0], span=[(0.05, 0.42)]),
-             {"slide": 0.05}, rate=250, impact_speed=0.3),
+        shared("door_damping"),
+        shared("flap_spring"),
+        shared("knob_armature"),
+        shared("pendulum_armature"),
+        shared("sash_mass_scale"),
+        shared("drawer_end_stop"),
         Case("newton_door_end_stop", "newton", door(0.45, 0.7, 2.0, open_limit=2.4),
              "door pushed open; a door stopper the model lacks",
              [fx("hinge", "end_stop", position=1.3, side="upper")], push(["hinge"], [1.5], span=[(0.2, 2.1)]),
              {"hinge": 0.3}, impact_speed=1.0),
-        Case("newton_lid_spring_damping", "newton", lid(0.35, 0.45, 1.2),
-             "counterbalanced lid (spring) with a damper, pushed",
-             [fx("lid_hinge", "spring", stiffness=1.2, rest_position=1.6),
-              fx("lid_hinge", "viscous_damping", damping=0.15)], push(["lid_hinge"], [1.5]), {"lid_hinge": 0.8}),
-        Case("newton_lid_mass_damping", "newton", lid_m(),
-             "lid pushed open and let fall: heavier than modelled, damped hinge",
-             [fx("lid_hinge", "mass_scale", scale=1.3), fx("lid_hinge", "viscous_damping", damping=0.2)],
-             push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6}),
-        Case("newton_double_pendulum_elbow_damping", "newton", double_pendulum(0.3, 0.6, 0.25, 0.4),
-             "double pendulum released from an angle; only the elbow is damped",
-             [fx("elbow", "viscous_damping", damping=0.01)], None, {"shoulder": 1.2, "elbow": -0.8}, rate=250),
-        Case("newton_drawer_small_damping", "newton", drawer(0.45, 0.5, 0.15, 4.0, 0.45),
-             "drawer pushed and released; SMALL but real viscous damping (time constant 5 s), at the edge",
-             [fx("slide", "viscous_damping", damping=0.8)], push(["slide"], [10.0]), {"slide": 0.1}, duration=10.0),
-        Case("newton_none_door_pushes", "newton", door_s(),
-             "NOTHING missing: cabinet door pushed toward random targets (the span reaches past both stops) and "
-             "released", [], push(["hinge"], [2.0], span=[(-0.8, 2.8)]),
-             {"hinge": 0.3}, effort_noise=0.01),
-        Case("newton_none_double_pendulum", "newton", double_pendulum(0.3, 0.6, 0.25, 0.4),
-             "NOTHING missing: double pendulum released", [], None, {"shoulder": 1.0, "elbow": 0.5}, rate=250),
-        Case("newton_none_lid_pose", "newton", lid_m(),
-             "NOTHING missing: lid pushed and dropped onto its stop, tracked by its link pose; jittered sample times, "
-             "dropouts", [], push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6},
-             observe="pose", jitter=True, dropouts=0.02, effort_noise=0.01),
+        shared("lid_spring_damping"),
+        shared("lid_mass_damping"),
+        shared("double_pendulum_elbow_damping"),
+        shared("drawer_small_damping"),
+        shared("none_door_pushes"),
+        shared("none_double_pendulum"),
+        shared("none_lid_pose"),
     ]
 
 

@@ -60,7 +60,7 @@ default_rng([seed, crc32(name)])):
                                     pose; jittered sample times, dropouts
 """
 
-import math
+import functools
 
 import mujoco
 import numpy as np
@@ -68,9 +68,7 @@ import sapien
 import sapien.physx as physx
 
 import gap_suite as gs
-from gap_suite import (DT, GRAVITY, Case, MujocoSim, SuiteError, compare_dynamics, door, double_pendulum, drawer, fx,
-                       joint_params, lid, measure_restitution, mujoco_model, pendulum, push, quat_from_rpy, sash,
-                       sines, tree_order, unit)
+from gap_suite import DT, GRAVITY, SuiteError, joint_params, quat_from_rpy, tree_order, unit
 
 ENGINE = f"sapien {sapien.__version__} (PhysX {physx.version()})"
 PHYSX_RTOL = 2e-5  # inertia and bias against MuJoCo, relative to the largest entry (PhysX computes in float32)
@@ -214,38 +212,12 @@ gs.SIMULATORS["physx"] = lambda case, mech, effects, gravity: PhysxSim(mech, eff
 # ---------------------------------------------------------------- checks
 
 
-def state_box(mech):
-    """Random states are drawn within the limits, or within +-pi for a continuous joint."""
-    joints = [mech.joint(name) for name in mech.movable()]
-    return (np.array([-math.pi if j.lower is None else j.lower for j in joints]),
-            np.array([math.pi if j.upper is None else j.upper for j in joints]))
-
-
 def check_rigid(case, engine_mech, nominal, rng):
     """PhysX's bodies against model.urdf as MuJoCo reads it (and, for a heavier link, the engine's bodies
     against MuJoCo's model of them): inertia, bias force and link poses at 3 random states. Returns the
-    worst relative inertia/bias error."""
-    pairs = [(case.mech, nominal)]
-    if any(e.kind == "mass_scale" for e in case.effects):
-        pairs.append((engine_mech, MujocoSim(mujoco_model(engine_mech, []), engine_mech.movable())))
-    worst = 0.0
-    for mech, reference in pairs:
-        sim = PhysxSim(mech, [])
-        lo, hi = state_box(mech)
-        for _ in range(3):
-            q, qd = rng.uniform(lo, hi), rng.normal(0.0, 1.0, len(lo))
-            worst = max(worst, compare_dynamics(f"{case.name} (PhysX)", sim.dynamics(q, qd), reference.dynamics(q, qd),
-                                                PHYSX_RTOL))
-            sim.set_state(q, qd)
-            reference.set_state(q, qd)
-            for link in (joint.child for joint in mech.joints):
-                got, want = sim.pose(link), reference.pose(link)
-                turn = min(np.abs(got[3:] - want[3:]).max(), np.abs(got[3:] + want[3:]).max())  # q and -q: one turn
-                err = max(np.abs(got[:3] - want[:3]).max(), turn)
-                if err > POSE_TOL:
-                    raise SuiteError(f"{case.name}: PhysX puts link {link} {err:.1e} away from model.urdf")
-        sim.close()
-    return worst
+    worst relative inertia/bias error (gap_suite.check_engine_rigid)."""
+    return max(gs.check_engine_rigid(case, engine_mech, nominal, rng, "PhysX",
+                                     [("PhysX", PhysxSim.dynamics, PHYSX_RTOL)], POSE_TOL))
 
 
 def measure_effects(case, engine_mech, rng):
@@ -254,44 +226,16 @@ def measure_effects(case, engine_mech, rng):
     an added diagonal inertia. A drive is implicit, close to -b (qd + DT qdd) - k (q + DT qd - r): it shows
     as b*DT more inertia, and up to k*DT more damping and k*DT^2 more inertia. Raises unless the fits match
     the values set (with that) to EFFECT_RTOL, the rest position to 1e-3, and joints without effects get
-    under EFFECT_RTOL of the others' (the step couples joints a little). Returns the fits per joint with
-    effects: {joint: {"damping", "armature" (all the added inertia)[, "stiffness", "rest_position"]}}."""
-    names = engine_mech.movable()
-    bare, full = PhysxSim(engine_mech, []), PhysxSim(engine_mech, case.effects)
-    lo, hi = state_box(engine_mech)
-    q, qd, effort, added, scale = [], [], [], [], 0.0
-    for _ in range(8):
-        q.append(rng.uniform(lo, hi))
-        qd.append(rng.normal(0.0, 1.0, len(names)))
-        (m0, b0), (m1, b1) = bare.dynamics(q[-1], qd[-1]), full.dynamics(q[-1], qd[-1])
-        effort.append(b0 - b1)
-        added.append(np.diag(m1 - m0))
-        scale = max(scale, np.abs(m0).max(), np.abs(b0).max())
-    bare.close()
-    full.close()
-    q, qd, effort, added = (np.array(x) for x in (q, qd, effort, added))
-    out = {}
-    for n, name in enumerate(names):
-        p = joint_params(case.effects, name)
-        if not (p["stiffness"] or p["damping"] or p["armature"]):
-            if (np.abs(effort[:, n]).max() > EFFECT_RTOL * np.abs(effort).max() + PHYSX_RTOL * scale or
-                    np.abs(added[:, n]).max() > EFFECT_RTOL * np.abs(added).max() + PHYSX_RTOL * scale):
-                raise SuiteError(f"{case.name}: PhysX adds an effort or inertia on {name}, which has no effect")
-            continue
-        columns = [-qd[:, n]] + ([-q[:, n], np.ones(len(q))] if p["stiffness"] else [])
-        fit = np.linalg.lstsq(np.column_stack(columns), effort[:, n], rcond=None)[0]
-        got = {"damping": fit[0], "armature": float(np.mean(added[:, n]))}
-        want = {"damping": (p["damping"], EFFECT_RTOL * p["damping"] + p["stiffness"] * DT),
+    under EFFECT_RTOL of the others' (the step couples joints a little; PHYSX_RTOL of the largest inertia or
+    bias is float32's floor). Returns the fits per joint with effects: {joint: {"damping", "armature" (all the
+    added inertia)[, "stiffness", "rest_position"]}} (gap_suite.measure_engine_effects)."""
+    def expected(p):
+        return {"damping": (p["damping"], EFFECT_RTOL * p["damping"] + p["stiffness"] * DT),
                 "armature": (p["armature"] + p["damping"] * DT,
                              EFFECT_RTOL * (p["armature"] + p["damping"] * DT) + p["stiffness"] * DT ** 2)}
-        if p["stiffness"]:
-            got.update(stiffness=fit[1], rest_position=fit[2] / fit[1])
-            want.update(stiffness=(p["stiffness"], EFFECT_RTOL * p["stiffness"]), rest_position=(p["springref"], 1e-3))
-        for key, (value, tol) in want.items():
-            if abs(got[key] - value) > max(tol, PHYSX_RTOL * scale):  # float32 floor
-                raise SuiteError(f"{case.name}: PhysX applies {key} {got[key]:.6g} on {name}, {value} was set")
-        out[name] = {key: float(f"{value:.4g}") for key, value in got.items()}
-    return out
+
+    return gs.measure_engine_effects(case, engine_mech, rng, "PhysX", PhysxSim.dynamics, expected, EFFECT_RTOL,
+                                     PHYSX_RTOL, was="{} was set")
 
 
 def check_drive_damping():
@@ -303,39 +247,20 @@ def check_drive_damping():
 
 
 def cases():
-    door_s = lambda: door(0.45, 0.7, 2.0)  # noqa: E731  I = 0.135 kg m^2
-    lid_m = lambda: lid(0.4, 0.5, 1.5)  # noqa: E731  I = 0.08 kg m^2, 2.9 N m of weight
+    shared = functools.partial(gs.engine_case, "px", "physx")  # gap_suite.ENGINE_CASES, named px_<key>
     return [
-        Case("px_door_damping", "physx", door_s(), "cabinet door pushed and released; the hinge is viscously damped",
-             [fx("hinge", "viscous_damping", damping=0.25)], push(["hinge"], [1.5]), {"hinge": 0.3}),
-        Case("px_flap_spring", "physx", door(0.25, 0.3, 0.4), "light flap on a vertical hinge with a return spring, pushed",
-             [fx("hinge", "spring", stiffness=0.15, rest_position=1.0)], push(["hinge"], [0.2]), {"hinge": 0.1},
-             duration=6.0, rate=250),
-        Case("px_pendulum_armature", "physx", pendulum(0.35, 0.8, 0.04),
-             "geared pendulum pushed and released: rotor inertia (inertia without weight)",
-             [fx("pivot", "armature", armature=0.02)], push(["pivot"], [1.5]), {"pivot": 0.5}, duration=10.0),
-        Case("px_sash_mass_scale", "physx", sash(0.8, 0.6, 5.0, 0.5), "window sash lifted by a multisine; heavier than modelled",
-             [fx("sash", "mass_scale", scale=1.3)], sines(["sash"], [30.0], [0.25]), {"sash": 0.25}, effort_noise=0.01),
-        Case("px_drawer_end_stop", "physx", drawer(0.45, 0.5, 0.15, 4.0, 0.45),
-             "drawer pushed open and shut; a stop inside stops it short of the modelled travel",
-             [fx("slide", "end_stop", position=0.3, side="upper")], push(["slide"], [12.0], span=[(0.05, 0.42)]),
-             {"slide": 0.05}, rate=250, impact_speed=0.3),
-        Case("px_lid_mass_damping", "physx", lid_m(), "lid pushed open and let fall: heavier than modelled, damped hinge",
-             [fx("lid_hinge", "mass_scale", scale=1.3), fx("lid_hinge", "viscous_damping", damping=0.2)],
-             push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6}),
-        Case("px_lid_spring_damping", "physx", lid(0.35, 0.45, 1.2), "counterbalanced lid (spring) with a damper, pushed",
-             [fx("lid_hinge", "spring", stiffness=1.2, rest_position=1.6), fx("lid_hinge", "viscous_damping", damping=0.15)],
-             push(["lid_hinge"], [1.5]), {"lid_hinge": 0.8}),
-        Case("px_double_pendulum_elbow_damping", "physx", double_pendulum(0.3, 0.6, 0.25, 0.4),
-             "double pendulum released from an angle; only the elbow is damped",
-             [fx("elbow", "viscous_damping", damping=0.01)], None, {"shoulder": 1.2, "elbow": -0.8}, rate=250),
-        Case("px_none_door_pushes", "physx", door_s(), "NOTHING missing: cabinet door pushed (at times into its stops) and "
-             "released", [], push(["hinge"], [2.0], span=[(-0.8, 2.8)]), {"hinge": 0.3}, effort_noise=0.01),
-        Case("px_none_double_pendulum", "physx", double_pendulum(0.3, 0.6, 0.25, 0.4),
-             "NOTHING missing: double pendulum released", [], None, {"shoulder": 1.0, "elbow": 0.5}, rate=250),
-        Case("px_none_lid_pose", "physx", lid_m(), "NOTHING missing: lid pushed and dropped onto its stop, tracked by its "
-             "link pose; jittered sample times, dropouts", [], push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6},
-             observe="pose", jitter=True, dropouts=0.02, effort_noise=0.01),
+        shared("door_damping"),
+        shared("flap_spring"),
+        shared("pendulum_armature"),
+        shared("sash_mass_scale"),
+        shared("drawer_end_stop"),
+        shared("lid_mass_damping"),
+        shared("lid_spring_damping"),
+        shared("double_pendulum_elbow_damping"),
+        shared("none_door_pushes", description="NOTHING missing: cabinet door pushed (at times into its stops) and "
+               "released"),
+        shared("none_double_pendulum"),
+        shared("none_lid_pose"),
     ]
 
 
@@ -347,12 +272,13 @@ def effect_detail(case, effect, engine_mech, measured):
     p, kind, got = effect.params, effect.kind, measured.get(effect.joint, {})
     joint = engine_mech.joint(effect.joint)
     if kind == "viscous_damping":
-        return (f"PhysX joint drive stiffness {joint_params(case.effects, joint.name)['stiffness']:g} damping {p['damping']} "
-                "(force mode, velocity target 0), implicit in the TGS step, close to -b*(qd + dt*qdd); measured over one "
-                f"step at 8 random states as -{got['damping']:g}*qd with {got['armature']:.3g} of apparent inertia")
+        return (f"PhysX joint drive stiffness {joint_params(case.effects, joint.name)['stiffness']:g} damping "
+                f"{p['damping']} (force mode, velocity target 0), implicit in the TGS step, close to -b*(qd + dt*qdd); "
+                f"measured over one step at 8 random states as -{got['damping']:g}*qd with {got['armature']:.3g} of "
+                "apparent inertia")
     if kind == "spring":
-        return (f"PhysX joint drive stiffness {p['stiffness']} position target {p['rest_position']} (force mode), implicit "
-                f"in the TGS step; measured over one step at 8 random states as -{got['stiffness']:g}*(q - "
+        return (f"PhysX joint drive stiffness {p['stiffness']} position target {p['rest_position']} (force mode), "
+                f"implicit in the TGS step; measured over one step at 8 random states as -{got['stiffness']:g}*(q - "
                 f"{got['rest_position']:g})")
     if kind == "armature":
         return f"PhysX joint armature {p['armature']}; measured as {got['armature']:g} added to the joint-space inertia"
@@ -365,12 +291,13 @@ def effect_detail(case, effect, engine_mech, measured):
 
 
 def engine_text(rigid_err):
-    return (f"{ENGINE}: physics-only scene (PhysxCpuSystem, no render system), TGS solver, {POSITION_ITERATIONS} position / "
-            f"{VELOCITY_ITERATIONS} velocity iterations, our own articulation from model.urdf's description (fixed root, "
-            f"principal inertia, joint frame x along the URDF axis, revolute_unwrapped / prismatic joints, no shapes), "
-            f"{DT} s steps, efforts through qf held between samples; joint friction coefficient, link damping, velocity "
-            f"limits and sleeping off; hard joint limits. Rigid bodies checked against model.urdf as MuJoCo reads it "
-            f"(inertia and bias from one-step accelerations, link poses): {rigid_err:.1e} relative")
+    return (f"{ENGINE}: physics-only scene (PhysxCpuSystem, no render system), TGS solver, {POSITION_ITERATIONS} "
+            f"position / {VELOCITY_ITERATIONS} velocity iterations, our own articulation from model.urdf's description "
+            "(fixed root, principal inertia, joint frame x along the URDF axis, revolute_unwrapped / prismatic "
+            f"joints, no shapes), {DT} s steps, efforts through qf held between samples; joint friction coefficient, "
+            "link damping, velocity limits and sleeping off; hard joint limits. Rigid bodies checked against "
+            "model.urdf as MuJoCo reads it (inertia and bias from one-step accelerations, link poses): "
+            f"{rigid_err:.1e} relative")
 
 
 def run_case(case, seed, out):
