@@ -203,17 +203,15 @@ fn identify_at(
     let sig = signals(&rec.time_s, positions, efforts, &band);
     // Joints that spend most of the recording against their stops leave effort space too little
     // free motion to regress on; position space (simulation through the stops) takes them.
-    let all_excluded = contact_masks(model, &rec.time_s, positions, rows, &band);
-    let rows: Vec<usize> = rows
+    let (rows, mut excluded): (Vec<usize>, Vec<Vec<bool>>) = rows
         .iter()
-        .zip(&all_excluded)
+        .copied()
+        .zip(contact_masks(model, &rec.time_s, positions, rows, &band))
         .filter(|(_, mask)| mask.iter().filter(|&&x| !x).count() as f64 >= MIN_FREE_SHARE * n as f64)
-        .map(|(j, _)| *j)
-        .collect();
+        .unzip();
     if rows.is_empty() {
         return None;
     }
-    let mut excluded = contact_masks(model, &rec.time_s, positions, &rows, &band);
     let everything = vec![true; n];
     let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
     let first = EffortProblem::new(model, &sig, gravity, &rows, &excluded, &everything, rules.clone())?;

@@ -19,7 +19,7 @@
 use super::effects::{Effect, JointPhysics};
 use super::fit;
 use super::locate::Span;
-use super::model::GapJoint;
+use super::model::{GapJoint, JointTerms};
 use super::recording::Recording;
 use super::report::RmsePair;
 use super::sim::{self, SimInput};
@@ -72,9 +72,7 @@ pub(super) fn held_out(
 /// carried through such a visit would score a guess, the same for every model.
 fn unseen_limit_visits(y: &[f64], train: &[bool], sigma: f64, physics: &JointPhysics) -> Vec<Span> {
     let band = AT_LIMIT_SIGMAS * sigma;
-    let at = |limit: Option<f64>, i: usize, below: bool| {
-        y[i].is_finite() && limit.is_some_and(|l| if below { y[i] <= l + band } else { y[i] >= l - band })
-    };
+    let at = |limit: Option<f64>, i: usize, below: bool| at_limit(y[i], limit, below, band);
     let seen = |limit: Option<f64>, below: bool| (0..y.len()).any(|i| train[i] && at(limit, i, below));
     let unseen = [(physics.lower, true), (physics.upper, false)].into_iter().filter(|&(l, below)| l.is_some() && !seen(l, below));
     let unseen: Vec<(Option<f64>, bool)> = unseen.collect();
@@ -124,6 +122,11 @@ const LIMIT_RESTITUTIONS: [f64; 11] = [0.0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5,
 /// Noise σs within which a measured position counts as at a limit.
 const AT_LIMIT_SIGMAS: f64 = 3.0;
 
+/// Whether the measured position `q` is within `band` of `limit`, a lower limit if `lower`.
+fn at_limit(q: f64, limit: Option<f64>, lower: bool, band: f64) -> bool {
+    q.is_finite() && limit.is_some_and(|l| if lower { q <= l + band } else { q >= l - band })
+}
+
 /// `physics` replayed open loop from `start`, with the restitution of the model's limits (from
 /// [`LIMIT_RESTITUTIONS`], the first on ties) that replays the samples `mask` selects best; the
 /// replay and the physics it used. No bounce where none of those samples reaches a limit (nothing
@@ -139,11 +142,7 @@ pub(super) fn replay_with_bounce(
     state: (f64, f64),
 ) -> (Vec<f64>, JointPhysics) {
     let band = AT_LIMIT_SIGMAS * sigma;
-    let reaches = |i: usize| {
-        mask[i]
-            && y[i].is_finite()
-            && (physics.lower.is_some_and(|lo| y[i] <= lo + band) || physics.upper.is_some_and(|hi| y[i] >= hi - band))
-    };
+    let reaches = |i: usize| mask[i] && (at_limit(y[i], physics.lower, true, band) || at_limit(y[i], physics.upper, false, band));
     let tried: &[f64] = if (0..y.len()).any(reaches) { &LIMIT_RESTITUTIONS } else { &[0.0] };
     let mut best: Option<(f64, Vec<f64>, JointPhysics)> = None;
     for &r in tried {
@@ -177,20 +176,27 @@ const MIN_HELD_OUT_PIECE_S: f64 = 3.0 * START_STATE_HORIZON_S;
 /// longer than a piece: there one open-loop replay from the start of the training part measures
 /// the model, and a small damping shows only over seconds.
 fn unstable_horizon_s(input: &SimInput<'_>, y: &[f64], train: &[bool]) -> Option<f64> {
-    let mut rates: Vec<f64> = (0..y.len())
-        .filter(|&i| train[i] && y[i].is_finite())
-        .map(|i| {
-            let (t, q) = (&input.terms[i], y[i]);
-            let slope = t.gravity_sin * q.cos() - t.gravity_cos * q.sin();
-            (slope / t.inertia.max(1e-12)).max(0.0).sqrt()
-        })
-        .collect();
-    if rates.is_empty() {
+    let rate = median_over_training(input, y, train, |t, q| {
+        let slope = t.gravity_sin * q.cos() - t.gravity_cos * q.sin();
+        (slope / t.inertia.max(1e-12)).max(0.0).sqrt()
+    })?;
+    piece_within_held_out(input, train, HELD_OUT_E_FOLDS / rate)
+}
+
+/// The median of `per_sample(terms, q)` over the training samples with a measured position.
+fn median_over_training(input: &SimInput<'_>, y: &[f64], train: &[bool], per_sample: impl Fn(&JointTerms, f64) -> f64) -> Option<f64> {
+    let mut values: Vec<f64> = (0..y.len()).filter(|&i| train[i] && y[i].is_finite()).map(|i| per_sample(&input.terms[i], y[i])).collect();
+    if values.is_empty() {
         return None;
     }
-    rates.sort_by(f64::total_cmp);
-    let rate = rates[rates.len() / 2];
-    let horizon_s = (HELD_OUT_E_FOLDS / rate).max(MIN_HELD_OUT_PIECE_S);
+    values.sort_by(f64::total_cmp);
+    Some(values[values.len() / 2])
+}
+
+/// A held-out piece of `horizon_s` (at least [`MIN_HELD_OUT_PIECE_S`]), where it is shorter than
+/// the held-out part (after the first sample not in `train`).
+fn piece_within_held_out(input: &SimInput<'_>, train: &[bool], horizon_s: f64) -> Option<f64> {
+    let horizon_s = horizon_s.max(MIN_HELD_OUT_PIECE_S);
     let held_s = input.time_s.last()? - input.time_s.iter().zip(train).find(|(_, t)| !**t).map(|(s, _)| *s)?;
     (horizon_s < held_s).then_some(horizon_s)
 }
@@ -211,21 +217,11 @@ const CARRIED_DRIFT_SIGMAS: f64 = 2.0;
 /// [`CARRIED_DRIFT_SIGMAS`] noise σs, at least [`MIN_HELD_OUT_PIECE_S`]; `None` without a carried
 /// weight or where one piece would cover the held-out part.
 fn loaded_horizon_s(input: &SimInput<'_>, y: &[f64], train: &[bool], sigma: f64) -> Option<f64> {
-    let mut loads: Vec<f64> = (0..y.len())
-        .filter(|&i| train[i] && y[i].is_finite())
-        .map(|i| input.terms[i].gravity_const.abs() / input.terms[i].inertia.max(1e-12))
-        .collect();
-    if loads.is_empty() {
-        return None;
-    }
-    loads.sort_by(f64::total_cmp);
-    let load = loads[loads.len() / 2];
+    let load = median_over_training(input, y, train, |t, _| t.gravity_const.abs() / t.inertia.max(1e-12))?;
     if load <= 0.0 {
         return None;
     }
-    let horizon_s = (2.0 * CARRIED_DRIFT_SIGMAS * sigma / (CARRIED_WEIGHT_ERROR * load)).sqrt().max(MIN_HELD_OUT_PIECE_S);
-    let held_s = input.time_s.last()? - input.time_s.iter().zip(train).find(|(_, t)| !**t).map(|(s, _)| *s)?;
-    (horizon_s < held_s).then_some(horizon_s)
+    piece_within_held_out(input, train, (2.0 * CARRIED_DRIFT_SIGMAS * sigma / (CARRIED_WEIGHT_ERROR * load)).sqrt())
 }
 
 /// Each piece of `pieces` replayed open loop from the state measured on its first
