@@ -309,7 +309,7 @@ fn fitted_gap_effects_become_mjcf_joint_dynamics() {
             {"joint": door_joint, "kind": "spring", "params": {"stiffness": 2.0, "rest_position": 0.3}},
             {"joint": door_joint, "kind": "end_stop", "params": {"position": 1.2, "restitution": 0.2}},
             {"joint": door_joint, "kind": "mass_scale", "params": {"scale": 1.5}},
-            {"joint": drawer_joint, "kind": "end_stop", "params": {"position": 0.02, "restitution": 0.0}},
+            {"joint": drawer_joint, "kind": "end_stop", "params": {"position": 0.02, "restitution": 0.92, "contact_time": 0.063}},
             {"joint": drawer_joint, "kind": "soft_close", "params": {"damping": 3.0, "engage_position": 0.05}},
             {"joint": "no_such_joint", "kind": "viscous_damping", "params": {"damping": 1.0}},
         ],
@@ -336,6 +336,13 @@ fn fitted_gap_effects_become_mjcf_joint_dynamics() {
         .sum();
     assert!((d.armature - 0.5 * f64::from(about_hinge)).abs() < 1e-4 * d.armature, "{} vs {}", d.armature, 0.5 * about_hinge);
     assert_eq!(table[&drawer_joint].range.map(|r| r[0]), Some(0.02), "the stop near the closed end narrows the lower limit");
+    // The compliant drawer stop as MuJoCo's soft limit: the spring–damper with restitution 0.92
+    // and 63 ms contacts, (time constant 1/(ζω_n), damping ratio ζ).
+    let zeta = -0.92f64.ln() / (std::f64::consts::PI.powi(2) + 0.92f64.ln().powi(2)).sqrt();
+    let omega_n = std::f64::consts::PI / 0.063 / (1.0 - zeta * zeta).sqrt();
+    let [timeconst, dampratio] = table[&drawer_joint].solreflimit.expect("a compliant stop writes solreflimit");
+    assert!((dampratio - zeta).abs() < 1e-12 && (timeconst - 1.0 / (zeta * omega_n)).abs() < 1e-9, "{timeconst} {dampratio}");
+    assert_eq!(d.solreflimit, None, "a hard stop keeps MuJoCo's default soft limit");
 
     let text = scene_mjcf(&s, &cfg, &table).expect("mjcf");
     let doc = roxmltree::Document::parse(&text).expect("xml");
@@ -346,6 +353,9 @@ fn fitted_gap_effects_become_mjcf_joint_dynamics() {
     assert_eq!(attr("stiffness"), Some(2.0));
     assert_eq!(attr("springref"), Some(0.3));
     assert!(attr("armature").is_some_and(|a| (a - d.armature).abs() < 1e-9));
+    let drawer = doc.descendants().find(|n| n.has_tag_name("joint") && n.attribute("name") == Some(drawer_joint.as_str())).expect("drawer");
+    let written: Vec<f64> = drawer.attribute("solreflimit").expect("solreflimit").split(' ').map(|v| v.parse().expect("number")).collect();
+    assert!((written[0] - timeconst).abs() < 1e-6 * timeconst && (written[1] - dampratio).abs() < 1e-6);
     let asset = partscene::assets::mjcf::parse_mjcf(&text, std::path::Path::new("x.xml")).expect("reads back");
     let aj = asset.joints.iter().find(|j| j.name == door_joint).expect("door joint");
     assert!((aj.upper - 1.2).abs() < 1e-6);

@@ -162,6 +162,19 @@ fn end_stop() {
     );
 }
 
+#[test]
+fn a_compliant_stop_is_named_with_its_contact_time() {
+    // A drawer stop that holds the drawer 50 ms per impact and throws it back at 0.8 of its
+    // speed (a penalty limit): a hard stop with any restitution replays each impact's timing
+    // wrong, and every later one with it. Five samples per contact at 100 Hz: the position is
+    // measured to 0.3 mm, a tenth of how deep the drawer sinks in.
+    let stop = TrueEffect::CompliantStop { position: 0.3, restitution: 0.8, contact_time_s: 0.05 };
+    check(
+        &Case { noise: 0.0003, ..Case::new("compliant_stop", vec![("drawer_slide", stop)]) },
+        &vec![("drawer_slide", "end_stop", vec![("position", 0.3), ("restitution", 0.8), ("contact_time", 0.05)])],
+    );
+}
+
 /// A pendulum on a horizontal axis: gravity does work on it, so its weight is seen.
 const PENDULUM: &str = r#"<robot name="pendulum">
   <link name="base"/>

@@ -7,8 +7,8 @@
 //!
 //! Semi-implicit Euler with sub-steps of at most [`MAX_STEP_S`]; friction as impulses solved by
 //! projected Gauss–Seidel on the inverse mass matrix (exact sticking for ideal Coulomb, the
-//! smooth law linearised and taken implicitly); stops clamp the position and reflect the velocity
-//! with the stop's restitution.
+//! smooth law linearised and taken implicitly); hard stops clamp the position and reflect the
+//! velocity with the stop's restitution, compliant ones push back as spring–dampers.
 
 use glam::DVec3;
 
@@ -75,7 +75,9 @@ fn step(tree: &MultiBody, physics: &[JointPhysics], effort: &[f64], gravity: DVe
     let rhs: Vec<f64> = (0..nd)
         .map(|d| {
             let p = &physics[d];
-            effort[d] + p.effort_offset + p.position_effort(q[d]) - p.damping_at(q[d]) * v[d] - bias[d]
+            // A compliant stop's spring–damper at the joint's own diagonal inertia.
+            let (contact, contact_damping) = p.compliant_contact(q[d], m[d * nd + d]);
+            effort[d] + p.effort_offset + p.position_effort(q[d]) + contact - (p.damping_at(q[d]) + contact_damping) * v[d] - bias[d]
         })
         .collect();
     let v_free: Vec<f64> = (0..nd).map(|d| v[d] + h * (0..nd).map(|k| w[d * nd + k] * rhs[k]).sum::<f64>()).collect();
@@ -130,7 +132,7 @@ fn stop(p: &JointPhysics, q: &mut f64, v: &mut f64) {
         *q = hi;
         *v = v.min(0.0);
     }
-    for s in &p.stops {
+    for s in p.stops.iter().filter(|s| !s.is_compliant()) {
         let beyond = if s.blocks_upward { *q > s.position } else { *q < s.position };
         if beyond {
             *q = s.position;

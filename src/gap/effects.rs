@@ -17,7 +17,7 @@ pub enum EffectKind {
     Spring,
     /// The true axis is tilted: gravity pulls a revolute joint towards an equilibrium, ∝ sin.
     GravityTilt,
-    /// A hard stop at `position` not in the model.
+    /// A stop at `position` not in the model: hard, or compliant with a contact time.
     EndStop,
     /// True inertia = scale × modelled.
     MassScale,
@@ -150,15 +150,65 @@ pub struct FrictionShape {
     pub stribeck: Option<(f64, f64)>,
 }
 
-/// An extra hard stop.
+/// An extra stop: hard (impacts are instant) or compliant (a linear spring–damper the joint
+/// sinks into, as an engine's penalty limit or a rubber bumper).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stop {
-    /// Position of the stop.
+    /// Position of the stop (where contact begins).
     pub position: f64,
     /// Coefficient of restitution in [0, 1].
     pub restitution: f64,
     /// True: q ≤ position; false: q ≥ position.
     pub blocks_upward: bool,
+    /// How long an impact keeps the joint past `position`, s; 0 for a hard stop.
+    pub contact_time_s: f64,
+}
+
+/// Shortest and longest contact of a compliant stop, s (the fitter's bounds): below a
+/// millisecond no recording tells a compliant stop from a hard one, and a joint held half a
+/// second is resting on it, not bouncing.
+pub const CONTACT_TIME_RANGE_S: (f64, f64) = (1e-3, 0.5);
+
+/// Least restitution a compliant stop is given: 0 would need a critically damped contact, which
+/// never ends (the joint creeps back out).
+const MIN_COMPLIANT_RESTITUTION: f64 = 0.01;
+
+impl Stop {
+    /// Whether impacts take time (a compliant stop).
+    #[must_use]
+    pub fn is_compliant(&self) -> bool {
+        self.contact_time_s > 0.0
+    }
+
+    /// How far `q` lies past the stop (positive inside it).
+    #[must_use]
+    pub fn penetration(&self, q: f64) -> f64 {
+        if self.blocks_upward { q - self.position } else { self.position - q }
+    }
+
+    /// Stiffness and damping of the linear spring–damper (Kelvin–Voigt) contact that throws a
+    /// joint of `inertia` back at `restitution` of its speed after `contact_time_s`: damping
+    /// ratio ζ from e = exp(−πζ/√(1−ζ²)), the contact lasting the damped half-period `π/ω_d`.
+    /// This is how a penalty limit (Newton's `limit_ke`/`limit_kd`, `MuJoCo`'s soft limits) and a
+    /// bumper behave; the pair is fitted as (restitution, contact time), which a recording shows
+    /// directly and which do not depend on each other.
+    #[must_use]
+    pub fn penalty(&self, inertia: f64) -> (f64, f64) {
+        let (omega_n, zeta) = contact_oscillator(self.restitution, self.contact_time_s);
+        (inertia * omega_n * omega_n, 2.0 * zeta * inertia * omega_n)
+    }
+}
+
+/// The linear spring–damper contact, as natural frequency `ω_n` (rad/s) and damping ratio ζ, that
+/// throws a body back at `restitution` of its speed after `contact_time_s`, whatever its mass:
+/// e = exp(−πζ/√(1−ζ²)), the contact the damped half-period `π/ω_d`. Restitution is kept within
+/// [0.01, 1] (0 would need a critically damped contact that never ends).
+#[must_use]
+pub fn contact_oscillator(restitution: f64, contact_time_s: f64) -> (f64, f64) {
+    let log_e = -restitution.clamp(MIN_COMPLIANT_RESTITUTION, 1.0).ln();
+    let zeta = log_e / (std::f64::consts::PI.powi(2) + log_e * log_e).sqrt();
+    let omega_d = std::f64::consts::PI / contact_time_s.max(CONTACT_TIME_RANGE_S.0);
+    (omega_d / (1.0 - zeta * zeta).sqrt(), zeta)
 }
 
 /// Everything the 1-DoF integrator needs about one joint beyond the rigid-body terms.
@@ -265,13 +315,25 @@ impl JointPhysics {
                 EffectKind::Armature => p.armature += x[0],
                 EffectKind::Spring => (p.stiffness, p.rest_position) = (x[0], x[1]),
                 EffectKind::GravityTilt => (p.tilt_amplitude, p.tilt_equilibrium) = (x[0], x[1]),
-                EffectKind::EndStop => p.stops.push(Stop { position: x[0], restitution: x[1], blocks_upward: e.blocks_upward }),
+                EffectKind::EndStop => p.stops.push(Stop {
+                    position: x[0],
+                    restitution: x[1],
+                    blocks_upward: e.blocks_upward,
+                    contact_time_s: x.get(2).copied().filter(|t| t.is_finite() && *t > 0.0).unwrap_or(0.0),
+                }),
                 EffectKind::MassScale => p.mass_scale = x[0],
                 EffectKind::SoftClose => p.soft_close = Some((x[0], x[1])),
                 EffectKind::Unknown => {}
             }
         }
         p
+    }
+
+    /// The joint's inertia along itself under these physics, from the `modelled` one: scaled by
+    /// a heavier part, plus armature.
+    #[must_use]
+    pub fn inertia(&self, modelled: f64) -> f64 {
+        (modelled * self.mass_scale + self.armature).max(1e-9)
     }
 
     /// Conservative efforts (spring, tilt) at position q.
@@ -302,6 +364,23 @@ impl JointPhysics {
         -self.friction_level(v) * (v / s).tanh()
     }
 
+    /// The compliant stops' contact at position q of a joint of `inertia`: the spring effort and
+    /// the damping coefficient of those q lies inside (the damping is left to the integrator,
+    /// which takes it implicitly).
+    #[must_use]
+    pub fn compliant_contact(&self, q: f64, inertia: f64) -> (f64, f64) {
+        self.stops.iter().filter(|s| s.is_compliant() && s.penetration(q) > 0.0).fold((0.0, 0.0), |(f, c), s| {
+            let (stiffness, damping) = s.penalty(inertia);
+            (f - stiffness * (q - s.position), c + damping)
+        })
+    }
+
+    /// The shortest contact time of the compliant stops, if any.
+    #[must_use]
+    pub fn shortest_contact_s(&self) -> Option<f64> {
+        self.stops.iter().filter(|s| s.is_compliant()).map(|s| s.contact_time_s).reduce(f64::min)
+    }
+
     /// Total viscous damping at position q (soft close included).
     #[must_use]
     pub fn damping_at(&self, q: f64) -> f64 {
@@ -318,13 +397,19 @@ impl JointPhysics {
     }
 }
 
-/// Keeps parameters physical: non-negative coefficients, restitution in [0, 1], scale ≥ 0.05.
+/// Keeps parameters physical: non-negative coefficients, restitution in [0, 1], a compliant
+/// stop's contact time within [`CONTACT_TIME_RANGE_S`], scale ≥ 0.05.
 pub fn clamp_params(kind: EffectKind, x: &mut [f64]) {
     match kind {
         EffectKind::ViscousDamping | EffectKind::CoulombFriction | EffectKind::Spring | EffectKind::GravityTilt | EffectKind::SoftClose => {
             x[0] = x[0].max(0.0);
         }
-        EffectKind::EndStop => x[1] = x[1].clamp(0.0, 1.0),
+        EffectKind::EndStop => {
+            x[1] = x[1].clamp(0.0, 1.0);
+            if let Some(t) = x.get_mut(2).filter(|t| t.is_finite()) {
+                *t = t.clamp(CONTACT_TIME_RANGE_S.0, CONTACT_TIME_RANGE_S.1);
+            }
+        }
         EffectKind::MassScale => x[0] = x[0].max(0.05),
         EffectKind::StribeckFriction | EffectKind::Armature => x.iter_mut().for_each(|v| *v = v.max(0.0)),
         EffectKind::EffortOffset | EffectKind::Unknown => {}

@@ -424,6 +424,7 @@ fn joint_outcome(
     let force = if joint.kind.is_rotational() { "N·m" } else { "N" };
     let zeros = vec![0.0; model.joints.len()];
     let terms = model.joint_terms(f.joint, &zeros, gravity);
+    let inertia = JointPhysics::with_effects(joint, &f.effects).inertia(terms.inertia);
     let mut effects: Vec<EffectReport> = f
         .effects
         .iter()
@@ -431,7 +432,7 @@ fn joint_outcome(
         .zip(&f.confidence)
         .zip(&f.effect_rms)
         .map(|(((e, sd), c), size)| {
-            let mut r = effect_report(joint, &terms, gravity, e, sd, *c, super::observed_range(y));
+            let mut r = effect_report(joint, &terms, gravity, e, sd, *c, super::observed_range(y), inertia);
             let _ = write!(
                 r.description,
                 " — {size:.4} {force} RMS over the motion, {:.0} % of the joint's own effort",

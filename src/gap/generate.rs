@@ -10,6 +10,7 @@ use glam::{DQuat, DVec3};
 use rand::Rng;
 use rand_distr::{Distribution, Normal};
 
+use super::effects::Stop;
 use super::error::GapError;
 use super::model::{DofKind, GapModel};
 
@@ -47,6 +48,16 @@ pub enum TrueEffect {
         position: f64,
         /// In [0, 1].
         restitution: f64,
+    },
+    /// An extra compliant stop: a linear spring–damper that throws the joint back at
+    /// `restitution` of its speed after `contact_time_s` (how a penalty limit behaves).
+    CompliantStop {
+        /// rad or m.
+        position: f64,
+        /// In (0, 1].
+        restitution: f64,
+        /// Seconds.
+        contact_time_s: f64,
     },
     /// The moving part `scale` × as heavy: inertia and weight (spec `mass_scale`).
     ExtraInertia {
@@ -117,6 +128,7 @@ struct TrueJoint {
     soft: Option<(f64, f64)>,
     closed_end: f64,
     stops: Vec<(f64, f64, bool)>,
+    compliant: Vec<Stop>,
 }
 
 impl TrueJoint {
@@ -145,7 +157,16 @@ impl TrueJoint {
             Some((c, _)) if zone => c,
             _ => 0.0,
         };
-        effort + g - self.spring.0 * (q - self.spring.1) - (self.damping + soft) * v
+        let contact: f64 = self
+            .compliant
+            .iter()
+            .filter(|s| s.penetration(q) > 0.0)
+            .map(|s| {
+                let (stiffness, damping) = s.penalty(self.inertia);
+                -stiffness * (q - s.position) - damping * v
+            })
+            .sum();
+        effort + g - self.spring.0 * (q - self.spring.1) - (self.damping + soft) * v + contact
     }
 
     fn rk4(&self, q: f64, v: f64, effort: f64, slide: f64, h: f64) -> (f64, f64) {
@@ -281,6 +302,7 @@ pub fn generate_recording(model: &GapModel, cfg: &GenerateConfig) -> Result<Stri
             soft: None,
             closed_end: joint.lower.unwrap_or(0.0),
             stops: Vec::new(),
+            compliant: Vec::new(),
         };
         if let Some(l) = joint.lower {
             tj.stops.push((l, 0.0, false));
@@ -312,6 +334,11 @@ pub fn generate_recording(model: &GapModel, cfg: &GenerateConfig) -> Result<Stri
                     let up = position > q_start;
                     tj.stops.push((position, restitution, up));
                     // Let the hand push past it so that the stop is hit.
+                    if up { reach.1 = reach.1.max(position) } else { reach.0 = reach.0.min(position) }
+                }
+                TrueEffect::CompliantStop { position, restitution, contact_time_s } => {
+                    let up = position > q_start;
+                    tj.compliant.push(Stop { position, restitution, blocks_upward: up, contact_time_s });
                     if up { reach.1 = reach.1.max(position) } else { reach.0 = reach.0.min(position) }
                 }
                 TrueEffect::ExtraInertia { scale } => {

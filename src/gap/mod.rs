@@ -440,6 +440,16 @@ fn analyze_joint(
     } else {
         (chosen, confidence)
     };
+    let chosen = match compliant_stop(rec, &problem, &chosen, t_split) {
+        Ok(compliant) => {
+            held = held_out::held_out(rec, input, y, sigma, joint, &compliant.effects, t_split);
+            compliant
+        }
+        Err(note) => {
+            rejected_here.extend(note);
+            chosen
+        }
+    };
     let chosen = match inertia_alone(&problem, &chosen) {
         Some((armature, note)) => {
             rejected_here.push(note);
@@ -453,7 +463,9 @@ fn analyze_joint(
         .iter()
         .zip(&chosen.param_std)
         .zip(&confidence)
-        .map(|((e, sd), c)| effect_report(joint, &terms[0], gravity, e, sd, *c, observed_range(y)))
+        .map(|((e, sd), c)| {
+            effect_report(joint, &terms[0], gravity, e, sd, *c, observed_range(y), fitted_physics.inertia(terms[0].inertia))
+        })
         .collect();
     if let Some(g) = given.filter(|_| !fell_back) {
         // Effort space's `unknown` stands when the exact simulation confirms that the motion is
@@ -702,6 +714,59 @@ fn refine_from_bounces(problem: &fit::Problem<'_>, effects: &[Effect]) -> fit::F
     best
 }
 
+/// Contact times a compliant stop's fit starts from, in sample intervals: a contact shorter than
+/// a few samples is not seen as one.
+const CONTACT_STARTS_SAMPLES: [f64; 3] = [3.0, 8.0, 20.0];
+
+/// Restitutions a compliant stop's fit also starts from (besides the hard stop's).
+const COMPLIANT_RESTITUTION_STARTS: [f64; 1] = [0.9];
+
+/// Share of the hard stop's held-out error a compliant stop must remove to be reported: a stop
+/// that is a little soft in an engine's integration is still a hard stop to its user.
+const COMPLIANT_HELD_OUT_GAIN: f64 = 0.25;
+
+/// `chosen` with its end stop made compliant (a contact time: a spring–damper the joint sinks
+/// into and is thrown back from), where that is material on data it was not fitted to: no worse
+/// on the training part, and [`COMPLIANT_HELD_OUT_GAIN`] of the hard stop's held-out error
+/// removed. Training cost alone cannot judge it: where the model's own limits are soft too,
+/// their misfit swamps the stop's. `Err` carries what the report says when a compliant stop was
+/// fitted and turned down (nothing when `chosen` has no stop). Hard stops are the default; an
+/// engine's penalty limit or a rubber bumper holds the joint for tens of milliseconds, which a
+/// hard stop with any restitution replays wrong, since each impact's timing shifts every later
+/// one.
+fn compliant_stop(rec: &Recording, problem: &fit::Problem<'_>, chosen: &fit::FitResult, t_split: f64) -> Result<fit::FitResult, Option<String>> {
+    let k = chosen.effects.iter().position(|e| e.kind == EffectKind::EndStop).ok_or(None)?;
+    let intervals: Vec<f64> = problem.input.time_s.windows(2).map(|w| w[1] - w[0]).collect();
+    let dt = effort::median(&intervals);
+    let hard_restitution = chosen.effects[k].params[1];
+    let mut best: Option<fit::FitResult> = None;
+    for n in CONTACT_STARTS_SAMPLES {
+        for r in std::iter::once(hard_restitution).chain(COMPLIANT_RESTITUTION_STARTS) {
+            let mut start = chosen.effects.clone();
+            start[k].params = vec![start[k].params[0], r, n * dt];
+            let fitted = fit::fit(problem, &start, Some(&free_mask(&start)), None, 25);
+            if best.as_ref().is_none_or(|b| fitted.cost < b.cost) {
+                best = Some(fitted);
+            }
+        }
+    }
+    let compliant = best.ok_or(None)?;
+    let contact_ms = 1e3 * compliant.effects[k].params[2];
+    if compliant.cost > chosen.cost {
+        return Err(Some(format!("end_stop: a compliant stop ({contact_ms:.0} ms contacts) fits worse than a hard one — kept hard")));
+    }
+    let held = |effects: &[Effect]| held_out::held_out(rec, problem.input, problem.y, problem.sigma, problem.joint, effects, t_split).rmse_after;
+    let (hard_held, compliant_held) = (held(&chosen.effects), held(&compliant.effects));
+    if hard_held > HELD_OUT_NOISE_SIGMAS * problem.sigma && compliant_held <= (1.0 - COMPLIANT_HELD_OUT_GAIN) * hard_held {
+        return Ok(compliant);
+    }
+    Err(Some(format!(
+        "end_stop: a compliant stop ({contact_ms:.0} ms contacts) replays the held-out part to {compliant_held:.4} against the hard \
+         stop's {hard_held:.4} (needs {:.0} % less, beyond the noise) — kept hard",
+        100.0 * COMPLIANT_HELD_OUT_GAIN
+    )))
+}
+
 fn free_mask(effects: &[Effect]) -> Vec<Vec<bool>> {
     effects
         .iter()
@@ -779,7 +844,8 @@ fn observed_range(y: &[f64]) -> f64 {
     if hi >= lo { hi - lo } else { 0.0 }
 }
 
-/// The report of one effect; `range` is the joint's observed range of motion (position σ floor).
+/// The report of one effect; `range` is the joint's observed range of motion (position σ floor),
+/// `inertia` the joint's inertia under the fitted physics (a compliant stop's stiffness).
 #[allow(clippy::too_many_arguments)]
 fn effect_report(
     joint: &model::GapJoint,
@@ -789,6 +855,7 @@ fn effect_report(
     sd: &[f64],
     confidence: f64,
     range: f64,
+    inertia: f64,
 ) -> EffectReport {
     let rot = joint.kind.is_rotational();
     let (force, length) = if rot { ("N·m", "rad") } else { ("N", "m") };
@@ -856,7 +923,24 @@ fn effect_report(
             put("position", x[0], sd[0]);
             put("restitution", x[1], sd[1]);
             let side = if e.blocks_upward { "above" } else { "below" };
-            format!("a hard stop at {:.4} {length} (blocks from {side}), restitution {:.2}", x[0], x[1])
+            match x.get(2).copied().filter(|t| t.is_finite() && *t > 0.0) {
+                Some(contact_s) => {
+                    put("contact_time", contact_s, sd.get(2).copied().unwrap_or(f64::NAN));
+                    let stop = effects::Stop { position: x[0], restitution: x[1], blocks_upward: e.blocks_upward, contact_time_s: contact_s };
+                    let (stiffness, damping) = stop.penalty(inertia);
+                    // Derived at the joint's inertia: no σ of their own.
+                    put("stiffness", stiffness, f64::NAN);
+                    put("damping", damping, f64::NAN);
+                    format!(
+                        "a compliant stop at {:.4} {length} (blocks from {side}): restitution {:.2}, each impact {:.0} ms long \
+                         (stiffness {stiffness:.4e} {force}/{length}, damping {damping:.4} {force}·s/{length})",
+                        x[0],
+                        x[1],
+                        1e3 * contact_s
+                    )
+                }
+                None => format!("a hard stop at {:.4} {length} (blocks from {side}), restitution {:.2}", x[0], x[1]),
+            }
         }
         EffectKind::MassScale => {
             put("scale", x[0], sd[0]);

@@ -254,7 +254,7 @@ pub fn sidecar_json(report: &GapReport, model_file: &str) -> String {
             "viscous_damping -> <dynamics damping>",
             "coulomb_friction -> <dynamics friction> (the mean of both directions; transition_speed and friction_reverse only here)",
             "stribeck_friction -> <dynamics friction> (the sliding level; breakaway and stribeck_speed only here)",
-            "end_stop -> <limit> (restitution only here)",
+            "end_stop -> <limit> (restitution, and a compliant stop's contact_time, stiffness and damping, only here; MJCF: range, solreflimit)",
             "armature, effort_offset, mass_scale, spring, gravity_tilt, soft_close -> only here (MJCF: armature, stiffness/springref)"
         ],
     });

@@ -7,7 +7,8 @@
 //! with Coulomb friction as a clamped impulse
 //! (so sticking is exact, no chattering), position by the trapezoidal rule; stops and the soft-close
 //! zone boundary as events located within the step (impact with restitution, then the rest of the
-//! step), position clamps as the fallback.
+//! step), position clamps as the fallback. A compliant stop is a spring–damper force instead, and
+//! a step that reaches into one is cut into sub-steps of a [`CONTACT_SUBSTEPS`]th of its contact.
 
 use super::effects::JointPhysics;
 use super::model::JointTerms;
@@ -34,8 +35,20 @@ pub struct SimInput<'a> {
 /// damping zone switches a whole step late: errors of O(h) that look like missing physics.
 #[must_use]
 pub fn step(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64, h: f64) -> (f64, f64) {
-    step_events(p, terms, effort, q, v, h, 0)
+    let whole = step_events(p, terms, effort, q, v, h, 0);
+    let Some(contact_s) = p.shortest_contact_s() else { return whole };
+    let touches = p.stops.iter().any(|s| s.is_compliant() && (s.penetration(q) > 0.0 || s.penetration(whole.0) > 0.0));
+    let n = (h * CONTACT_SUBSTEPS / contact_s).ceil();
+    if !touches || n <= 1.0 {
+        return whole;
+    }
+    let h_sub = h / n;
+    (0..n as usize).fold((q, v), |(q, v), _| step_events(p, terms, effort, q, v, h_sub, 0))
 }
+
+/// Sub-steps per contact time inside a compliant stop: the spring's phase advances π/40 per
+/// sub-step, so a bounce's restitution and duration come out within a percent.
+pub const CONTACT_SUBSTEPS: f64 = 40.0;
 
 /// Most events handled within one step before falling back to clamping.
 const MAX_EVENTS: usize = 4;
@@ -51,7 +64,7 @@ enum Event {
 
 /// The joint's inertia under `p`: the modelled one scaled, plus armature.
 fn inertia_of(p: &JointPhysics, terms: &JointTerms) -> f64 {
-    (terms.inertia * p.mass_scale + p.armature).max(1e-9)
+    p.inertia(terms.inertia)
 }
 
 /// The gravity effort under `p` (a heavier part weighs more).
@@ -65,10 +78,11 @@ fn free_step(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64, 
     // Position forces at the predicted midpoint and trapezoidal damping: second order, so that a
     // stiff spring or a strong soft-close damper does not drift from the truth over seconds.
     let q_mid = q + 0.5 * h * v;
-    let force = effort + p.effort_offset + terms.coupling + gravity_of(p, terms, q_mid) + p.position_effort(q_mid);
+    let (contact, contact_damping) = p.compliant_contact(q_mid, inertia);
+    let force = effort + p.effort_offset + terms.coupling + gravity_of(p, terms, q_mid) + p.position_effort(q_mid) + contact;
     // Damping of the zone the step moves into (a start exactly on the engage position counts
     // the side the joint is heading to).
-    let k = 0.5 * h * p.damping_at(q_mid) / inertia;
+    let k = 0.5 * h * (p.damping_at(q_mid) + contact_damping) / inertia;
     let free = v * (1.0 - k) + h * force / inertia;
     let v_new = if p.friction_shape.transition_speed > 0.0 {
         // Smooth friction, linearised about v and taken implicitly: stable for any step even
@@ -111,7 +125,7 @@ fn step_events(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64
         if let Some(hi) = p.upper {
             consider(hi, Event::Stop(hi, p.limit_restitution, true), Some(true));
         }
-        for s in &p.stops {
+        for s in p.stops.iter().filter(|s| !s.is_compliant()) {
             consider(s.position, Event::Stop(s.position, s.restitution, s.blocks_upward), Some(s.blocks_upward));
         }
         if let Some((_, engage)) = p.soft_close {
@@ -163,7 +177,7 @@ fn clamp(p: &JointPhysics, mut q_new: f64, mut v_new: f64) -> (f64, f64) {
         v_new = v_new.min(0.0);
     }
     // Only reached while resting on a stop (or after many events in one step): no bounce.
-    for s in &p.stops {
+    for s in p.stops.iter().filter(|s| !s.is_compliant()) {
         if s.blocks_upward && q_new > s.position {
             q_new = s.position;
             v_new = v_new.min(0.0);
@@ -197,6 +211,7 @@ pub fn simulate(input: &SimInput<'_>, p: &JointPhysics, i0: usize, i1: usize, q0
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gap::effects::Stop;
     use crate::gap::model::DofKind;
 
     fn free_joint() -> JointPhysics {
@@ -217,6 +232,30 @@ mod tests {
         let exact = |t: f64| (-0.2 * t).exp() * ((wd * t).cos() + 0.2 / wd * (wd * t).sin());
         for (i, t) in time.iter().enumerate() {
             assert!((out[i] - exact(*t)).abs() < 0.01, "t {t}: {} vs {}", out[i], exact(*t));
+        }
+    }
+
+    #[test]
+    fn a_compliant_stop_throws_the_joint_back_at_its_restitution_after_its_contact_time() {
+        // A free 2 kg slide at 0.3 m/s into a compliant stop at 0.1 m: it leaves the stop at
+        // restitution × its speed, having been inside for the contact time, as deep as the
+        // spring–damper lets it go.
+        for (restitution, contact_s) in [(0.9, 0.06), (0.5, 0.02), (0.1, 0.01)] {
+            let mut p = JointPhysics::free(DofKind::Prismatic);
+            let stop = Stop { position: 0.1, restitution, blocks_upward: true, contact_time_s: contact_s };
+            p.stops.push(stop);
+            let terms = JointTerms { inertia: 2.0, ..JointTerms::default() };
+            let (mut q, mut v, mut t, mut inside_s) = (0.0, 0.3, 0.0, 0.0);
+            while t < 1.5 {
+                (q, v) = step(&p, &terms, 0.0, q, v, 0.002);
+                t += 0.002;
+                if q > 0.1 {
+                    inside_s += 0.002;
+                }
+            }
+            assert!((v + restitution * 0.3).abs() < 0.01 * 0.3, "e {restitution}: left at {v}");
+            assert!((inside_s - contact_s).abs() <= 0.0021, "e {restitution}: inside {inside_s} s, not {contact_s}");
+            assert!(q < 0.1, "e {restitution}: still inside at {q}");
         }
     }
 
