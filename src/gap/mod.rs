@@ -734,7 +734,12 @@ const COMPLIANT_HELD_OUT_GAIN: f64 = 0.25;
 /// engine's penalty limit or a rubber bumper holds the joint for tens of milliseconds, which a
 /// hard stop with any restitution replays wrong, since each impact's timing shifts every later
 /// one.
-fn compliant_stop(rec: &Recording, problem: &fit::Problem<'_>, chosen: &fit::FitResult, t_split: f64) -> Result<fit::FitResult, Option<String>> {
+fn compliant_stop(
+    rec: &Recording,
+    problem: &fit::Problem<'_>,
+    chosen: &fit::FitResult,
+    t_split: f64,
+) -> Result<fit::FitResult, Option<String>> {
     let k = chosen.effects.iter().position(|e| e.kind == EffectKind::EndStop).ok_or(None)?;
     let intervals: Vec<f64> = problem.input.time_s.windows(2).map(|w| w[1] - w[0]).collect();
     let dt = effort::median(&intervals);
@@ -755,7 +760,8 @@ fn compliant_stop(rec: &Recording, problem: &fit::Problem<'_>, chosen: &fit::Fit
     if compliant.cost > chosen.cost {
         return Err(Some(format!("end_stop: a compliant stop ({contact_ms:.0} ms contacts) fits worse than a hard one — kept hard")));
     }
-    let held = |effects: &[Effect]| held_out::held_out(rec, problem.input, problem.y, problem.sigma, problem.joint, effects, t_split).rmse_after;
+    let held =
+        |effects: &[Effect]| held_out::held_out(rec, problem.input, problem.y, problem.sigma, problem.joint, effects, t_split).rmse_after;
     let (hard_held, compliant_held) = (held(&chosen.effects), held(&compliant.effects));
     if hard_held > HELD_OUT_NOISE_SIGMAS * problem.sigma && compliant_held <= (1.0 - COMPLIANT_HELD_OUT_GAIN) * hard_held {
         return Ok(compliant);
@@ -926,7 +932,8 @@ fn effect_report(
             match x.get(2).copied().filter(|t| t.is_finite() && *t > 0.0) {
                 Some(contact_s) => {
                     put("contact_time", contact_s, sd.get(2).copied().unwrap_or(f64::NAN));
-                    let stop = effects::Stop { position: x[0], restitution: x[1], blocks_upward: e.blocks_upward, contact_time_s: contact_s };
+                    let stop =
+                        effects::Stop { position: x[0], restitution: x[1], blocks_upward: e.blocks_upward, contact_time_s: contact_s };
                     let (stiffness, damping) = stop.penalty(inertia);
                     // Derived at the joint's inertia: no σ of their own.
                     put("stiffness", stiffness, f64::NAN);
