@@ -6,7 +6,7 @@
 //! | --- | --- | --- | --- | --- |
 //! | fixed | fixed | — | child centre | 0 |
 //! | drawer | prismatic | the parent's face normal the part sits on, outward | child centre | 0 .. `drawer_travel` × parent depth |
-//! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one; a lid's longer edge towards the parent's centre) | on that edge, at the door's back face | 0 .. `revolute_upper_rad` |
+//! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one; a lid's longer edge towards the parent's centre) | on that edge, at the door's back face; a door set into its parent's opening (half its thickness or more within the parent's depth): in the jamb beside the edge, at mid-thickness | 0 .. `revolute_upper_rad` |
 //! | `sliding_panel` | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
 //! | knob | revolute | the outward face normal (or the round axis a test found; touching nothing, a disc's thin axis) | knob centre | −π .. π |
 //! | lever | revolute | the outward face normal | a bar (≥ `lever_min_elongation` × as long as wide across the axis): its end away from a grip on it, else the end nearer the parent's centre; otherwise, or through its mount, its centre | −π .. π |
@@ -384,13 +384,46 @@ fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, handle: Option<Vec3>) 
         };
         (h, a, side)
     });
-    let back = -out * (axes[thick].dot(out).abs() * half[thick]);
-    let pivot = c + axes[across] * (side * half[across]) + back;
+    let pivot = match inset_pin_offset(parent, door, axes[across] * side, out, half[across]) {
+        // An inset door: its pin stands in the jamb beside its edge, at mid-thickness.
+        Some(past_edge) => c + axes[across] * (side * (half[across] + past_edge)),
+        // An overlay door or lid swings about its back edge, against the parent's face.
+        None => c + axes[across] * (side * half[across]) - out * (axes[thick].dot(out).abs() * half[thick]),
+    };
     let mut axis = axes[hinge_axis];
     if axis.cross(c - pivot).dot(out) < 0.0 {
         axis = -axis;
     }
     (axis, pivot)
+}
+
+/// Least share of a door's thickness that must lie within the parent's depth for the door to be
+/// inset (set into the parent's opening rather than laid over its face).
+const INSET_DEPTH_SHARE: f32 = 0.5;
+
+/// How far past its hinge edge (along `towards_edge`, unit, from the door's centre) an inset
+/// door's pin stands, or None for a door laid over its parent's face (less than
+/// [`INSET_DEPTH_SHARE`] of its thickness within the parent's depth along `out`). A door set
+/// into its parent's opening cannot swing about its back edge, which lies inside the opening:
+/// its pin stands in the jamb beside it, at mid-thickness, half way to the parent's outer side
+/// there, and no further from the edge than the door is thick (a pin further out would open a
+/// gap as the door turns). Doors on other projects' assets: a frame post's axis 3.5–6 cm past
+/// the door's edge (robosuite, Adroit), a pin in the 0.8 cm gap (Meta-World's door lock).
+fn inset_pin_offset(parent: &Primitive, door: &Primitive, towards_edge: Vec3, out: Vec3, half_across: f32) -> Option<f32> {
+    let along = |p: &Primitive, dir: Vec3| {
+        let (c, h) = (p.center().dot(dir), 0.5 * p.extent_along(dir));
+        (c - h, c + h)
+    };
+    let (door_back, door_front) = along(door, out);
+    let (parent_back, parent_front) = along(parent, out);
+    let thickness = door_front - door_back;
+    let within = door_front.min(parent_front) - door_back.max(parent_back);
+    if thickness <= 0.0 || within <= INSET_DEPTH_SHARE * thickness {
+        return None;
+    }
+    let edge = door.center().dot(towards_edge) + half_across;
+    let parent_side = along(parent, towards_edge).1;
+    Some((0.5 * (parent_side - edge)).clamp(0.0, thickness))
 }
 
 #[cfg(test)]
@@ -567,6 +600,39 @@ mod tests {
         let q = crate::math::Quat::from_axis_angle(j.axis_world, 0.3);
         let moved = j.origin_world + q * (door.center() - j.origin_world);
         assert!(moved.y > door.center().y);
+    }
+
+    #[test]
+    fn an_inset_door_turns_about_a_pin_in_the_jamb_beside_it_at_mid_thickness() {
+        // A door set into a frame's opening (its 4 cm thickness inside the frame's depth), the
+        // frame's side 10 cm past the door's -x edge: the pin stands half way to it, capped at
+        // the door's thickness, at the door's mid-thickness.
+        let frame = Primitive::cuboid_at(Vec3::new(0.2, 0.0, 1.0), Vec3::new(1.0, 0.1, 2.0));
+        let door = Primitive::cuboid_at(Vec3::new(0.2, 0.0, 1.0), Vec3::new(0.8, 0.04, 1.9));
+        let handle = Vec3::new(0.5, 0.04, 1.0);
+        let j = estimate_joint(
+            1,
+            &frame,
+            2,
+            &door,
+            &spec(JointKind::Revolute, Template::Hinge, Some(handle), None),
+            &KinematicsConfig::default(),
+        );
+        assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "{j:?}");
+        assert!((j.origin_world.x - (-0.2 - 0.04)).abs() < 1e-5, "a door's thickness past the -x edge: {j:?}");
+        assert!(j.origin_world.y.abs() < 1e-5, "at mid-thickness: {j:?}");
+        // The same door laid over the frame's front face hinges on its back edge.
+        let overlay = Primitive::cuboid_at(Vec3::new(0.2, 0.07, 1.0), Vec3::new(0.8, 0.04, 1.9));
+        let handle = Vec3::new(0.5, 0.11, 1.0);
+        let j = estimate_joint(
+            1,
+            &frame,
+            2,
+            &overlay,
+            &spec(JointKind::Revolute, Template::Hinge, Some(handle), None),
+            &KinematicsConfig::default(),
+        );
+        assert!((j.origin_world.x + 0.2).abs() < 1e-5 && (j.origin_world.y - 0.05).abs() < 1e-5, "{j:?}");
     }
 
     #[test]
