@@ -143,3 +143,31 @@ fn stop(p: &JointPhysics, q: &mut f64, v: &mut f64) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gap::effects::Stop;
+    use crate::gap::model::parse_model;
+
+    #[test]
+    fn a_compliant_stop_in_a_chain_throws_the_joint_back_at_its_restitution_after_its_contact_time() {
+        // A 2 kg slide at 0.3 m/s into a compliant stop at 0.1 m, gravity off: it comes back at
+        // restitution × its speed after the contact time, as in the 1-DoF integrator.
+        let urdf = r#"<robot name="slide"><link name="base"/>
+          <link name="drawer"><inertial><mass value="2"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+          <joint name="slide" type="prismatic"><parent link="base"/><child link="drawer"/><axis xyz="1 0 0"/>
+            <limit lower="-1" upper="1" effort="10" velocity="1"/></joint></robot>"#;
+        let model = parse_model(urdf, std::path::Path::new("slide.urdf")).expect("model");
+        let (tree, _) = model.multibody().expect("tree");
+        let mut physics = JointPhysics::nominal(&model.joints[model.dofs()[0]]);
+        physics.stops.push(Stop { position: 0.1, restitution: 0.6, blocks_upward: true, contact_time_s: 0.04 });
+        let time_s: Vec<f64> = (0..=1000).map(|i| f64::from(i) * 0.001).collect();
+        let effort = vec![vec![0.0; time_s.len()]];
+        let q = replay(&tree, &[physics], &ChainInput { time_s: &time_s, effort: &effort, gravity: DVec3::ZERO }, &[0.0], &[0.3]);
+        let inside_s = q[0].iter().filter(|&&x| x > 0.1).count() as f64 * 0.001;
+        let speed = (q[0][1000] - q[0][900]) / 0.1;
+        assert!((inside_s - 0.04).abs() <= 0.002, "inside {inside_s} s");
+        assert!((speed + 0.6 * 0.3).abs() < 0.02 * 0.3, "left at {speed}");
+    }
+}
