@@ -318,7 +318,8 @@ fn fitted_gap_effects_become_mjcf_joint_dynamics() {
     let effects: Vec<FittedEffect> = fitted_effects_from_json(&sidecar, "model.fitted.json").expect("sidecar");
     assert_eq!(effects.len(), 9);
     let (table, warnings) = dynamics_from_effects(&s, &cfg, &effects);
-    assert_eq!(warnings.len(), 2, "soft close and the unknown joint: {warnings:?}");
+    assert_eq!(warnings.len(), 3, "soft close, the unknown joint and the compliant limit's two ends: {warnings:?}");
+    assert!(warnings.iter().any(|w| w.message.contains("both limits")), "{warnings:?}");
     let d = table[&door_joint];
     assert!((d.damping - 0.5).abs() < 1e-12 && (d.frictionloss - 0.05).abs() < 1e-12);
     assert!((d.stiffness - 2.0).abs() < 1e-12 && (d.springref - 0.3).abs() < 1e-12);

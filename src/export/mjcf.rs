@@ -159,18 +159,12 @@ pub fn dynamics_from_effects(scene: &SceneModel, cfg: &UrdfConfig, effects: &[Fi
             "end_stop" => {
                 let [lo, hi] = d.range.unwrap_or([f64::from(joint.lower.min(joint.upper)), f64::from(joint.upper.max(joint.lower))]);
                 let at = p("position");
-                if at > lo && at < hi {
+                let narrows = at > lo && at < hi;
+                if narrows {
                     d.range = Some(if at - lo < hi - at { [at, hi] } else { [lo, at] });
                 }
-                // A compliant stop: MuJoCo's soft limit as the same spring–damper, mass-free in
-                // its (time constant, damping ratio) form: ω_n = 1/(τζ), 2ζω_n = 2/τ at constant
-                // impedance. In MuJoCo 3 a slide at 0.3 m/s into (e 0.92, 63 ms) came back at
-                // 0.921 after 63 ms; below e ≈ 0.5 it bounces a little more (0.55 for 0.5, 0.32
-                // for 0.2), as a limit there cannot pull.
                 if let Some(contact_s) = e.params.get("contact_time").copied().filter(|t| t.is_finite() && *t > 0.0) {
-                    let (omega_n, zeta) = crate::gap::effects::contact_oscillator(p("restitution"), contact_s);
-                    let zeta = zeta.max(MIN_LIMIT_DAMPRATIO);
-                    d.solreflimit = Some([1.0 / (zeta * omega_n), zeta]);
+                    compliant_limit(d, &e.joint, p("restitution"), contact_s, narrows, &mut warnings);
                 }
             }
             "mass_scale" => {
@@ -193,6 +187,44 @@ pub fn dynamics_from_effects(scene: &SceneModel, cfg: &UrdfConfig, effects: &[Fi
         }
     }
     (table, warnings)
+}
+
+/// The shortest time constant `MuJoCo` keeps for a soft limit at the exported (default) 2 ms
+/// step: with `refsafe`, on by default, it raises shorter ones to twice the step.
+const MUJOCO_MIN_TIMECONST_S: f64 = 0.004;
+
+/// A compliant end stop as `MuJoCo`'s soft limit: the same spring–damper, mass-free in its (time
+/// constant, damping ratio) form, `ω_n = 1/(τζ)` and `2ζω_n = 2/τ` at constant impedance. In
+/// `MuJoCo` 3 a slide at 0.3 m/s into (restitution 0.92, 63 ms) came back at 0.921 after 63 ms;
+/// below a restitution of about 0.5 it bounces a little more (0.55 for 0.5, 0.32 for 0.2), as a
+/// limit there cannot pull. Written only where the stop is the joint's limit (it narrowed the
+/// range); `solreflimit` softens both ends of the joint, which the warnings say.
+fn compliant_limit(d: &mut JointDynamics, joint: &str, restitution: f64, contact_s: f64, narrows: bool, warnings: &mut Vec<Warning>) {
+    let at = format!("joint {joint}");
+    if !narrows {
+        warnings.push(Warning::new("export", at, "a compliant end stop outside the joint's range: its compliance is not written"));
+        return;
+    }
+    let (omega_n, zeta) = crate::gap::effects::contact_oscillator(restitution, contact_s);
+    let zeta = zeta.max(MIN_LIMIT_DAMPRATIO);
+    let timeconst = 1.0 / (zeta * omega_n);
+    d.solreflimit = Some([timeconst, zeta]);
+    warnings.push(Warning::new(
+        "export",
+        at.clone(),
+        "a compliant end stop → solreflimit, which MJCF applies to both limits of the joint: the other end is as soft",
+    ));
+    if timeconst < MUJOCO_MIN_TIMECONST_S {
+        warnings.push(Warning::new(
+            "export",
+            at,
+            format!(
+                "solreflimit time constant {:.1} ms: MuJoCo raises it to {:.0} ms (twice its step), so the stop comes out softer than fitted",
+                1e3 * timeconst,
+                1e3 * MUJOCO_MIN_TIMECONST_S
+            ),
+        ));
+    }
 }
 
 /// Inertia of the subtree under `child` about its hinge axis (kg·m²), or its mass for a slide

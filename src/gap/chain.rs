@@ -13,6 +13,7 @@
 use glam::DVec3;
 
 use super::effects::JointPhysics;
+use super::sim::CONTACT_SUBSTEPS;
 use crate::dynamics::MultiBody;
 
 /// Largest integration step, s.
@@ -48,7 +49,11 @@ pub fn replay(tree: &MultiBody, physics: &[JointPhysics], input: &ChainInput<'_>
     }
     for i in 0..n - 1 {
         let dt = input.time_s[i + 1] - input.time_s[i];
-        let steps = (dt / MAX_STEP_S).ceil().max(1.0) as usize;
+        // A compliant stop's contact in at least `CONTACT_SUBSTEPS` steps, as in the 1-DoF
+        // integrator (its spring–damper is explicit here).
+        let contact_steps =
+            physics.iter().filter_map(JointPhysics::shortest_contact_s).map(|t| (dt * CONTACT_SUBSTEPS / t).ceil()).fold(0.0, f64::max);
+        let steps = (dt / MAX_STEP_S).ceil().max(contact_steps).max(1.0) as usize;
         let h = dt / steps as f64;
         let effort: Vec<f64> = (0..nd).map(|d| input.effort.get(d).and_then(|e| e.get(i)).copied().unwrap_or(0.0)).collect();
         for _ in 0..steps {

@@ -319,7 +319,11 @@ impl JointPhysics {
                     position: x[0],
                     restitution: x[1],
                     blocks_upward: e.blocks_upward,
-                    contact_time_s: x.get(2).copied().filter(|t| t.is_finite() && *t > 0.0).unwrap_or(0.0),
+                    contact_time_s: x
+                        .get(2)
+                        .copied()
+                        .filter(|t| t.is_finite() && *t > 0.0)
+                        .map_or(0.0, |t| t.clamp(CONTACT_TIME_RANGE_S.0, CONTACT_TIME_RANGE_S.1)),
                 }),
                 EffectKind::MassScale => p.mass_scale = x[0],
                 EffectKind::SoftClose => p.soft_close = Some((x[0], x[1])),
@@ -365,8 +369,8 @@ impl JointPhysics {
     }
 
     /// The compliant stops' contact at position q of a joint of `inertia`: the spring effort and
-    /// the damping coefficient of those q lies inside (the damping is left to the integrator,
-    /// which takes it implicitly).
+    /// the damping coefficient of those q lies inside (the damping is left to the integrator: the
+    /// 1-DoF one takes it implicitly, the chain replay in sub-steps of a fortieth of the contact).
     #[must_use]
     pub fn compliant_contact(&self, q: f64, inertia: f64) -> (f64, f64) {
         self.stops.iter().filter(|s| s.is_compliant() && s.penetration(q) > 0.0).fold((0.0, 0.0), |(f, c), s| {
@@ -405,7 +409,8 @@ pub fn clamp_params(kind: EffectKind, x: &mut [f64]) {
             x[0] = x[0].max(0.0);
         }
         EffectKind::EndStop => {
-            x[1] = x[1].clamp(0.0, 1.0);
+            let compliant = x.get(2).is_some_and(|t| t.is_finite());
+            x[1] = x[1].clamp(if compliant { MIN_COMPLIANT_RESTITUTION } else { 0.0 }, 1.0);
             if let Some(t) = x.get_mut(2).filter(|t| t.is_finite()) {
                 *t = t.clamp(CONTACT_TIME_RANGE_S.0, CONTACT_TIME_RANGE_S.1);
             }

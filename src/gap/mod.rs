@@ -421,6 +421,15 @@ fn analyze_joint(
             (refit, conf)
         }
     };
+    // A stop the recording shows compliant is judged as such (a hard one in its place may be
+    // what makes the held-out replay worse).
+    let chosen = match compliant_stop(rec, &problem, &chosen, t_split) {
+        Ok(compliant) => compliant,
+        Err(note) => {
+            rejected_here.extend(note);
+            chosen
+        }
+    };
     // Terms chosen in position space must hold on data they were not fitted to: a structure
     // that makes the held-out replay worse is not reported (it fits how stops or friction are
     // simulated, not missing physics). A held-out part that both replays follow to within the
@@ -439,16 +448,6 @@ fn analyze_joint(
         (nominal.clone(), Vec::new())
     } else {
         (chosen, confidence)
-    };
-    let chosen = match compliant_stop(rec, &problem, &chosen, t_split) {
-        Ok(compliant) => {
-            held = held_out::held_out(rec, input, y, sigma, joint, &compliant.effects, t_split);
-            compliant
-        }
-        Err(note) => {
-            rejected_here.extend(note);
-            chosen
-        }
     };
     let chosen = match inertia_alone(&problem, &chosen) {
         Some((armature, note)) => {

@@ -37,7 +37,9 @@ pub struct SimInput<'a> {
 pub fn step(p: &JointPhysics, terms: &JointTerms, effort: f64, q: f64, v: f64, h: f64) -> (f64, f64) {
     let whole = step_events(p, terms, effort, q, v, h, 0);
     let Some(contact_s) = p.shortest_contact_s() else { return whole };
-    let touches = p.stops.iter().any(|s| s.is_compliant() && (s.penetration(q) > 0.0 || s.penetration(whole.0) > 0.0));
+    // Within reach of the stop at the start's speed, or past it at the end: a step may dip into a
+    // stiff contact and out again, and its midpoint force would throw the joint back.
+    let touches = p.stops.iter().any(|s| s.is_compliant() && (s.penetration(q) + v.abs() * h > 0.0 || s.penetration(whole.0) > 0.0));
     let n = (h * CONTACT_SUBSTEPS / contact_s).ceil();
     if !touches || n <= 1.0 {
         return whole;

@@ -418,7 +418,7 @@ fn inset_pin_offset(parent: &Primitive, door: &Primitive, towards_edge: Vec3, ou
     let (parent_back, parent_front) = along(parent, out);
     let thickness = door_front - door_back;
     let within = door_front.min(parent_front) - door_back.max(parent_back);
-    if thickness <= 0.0 || within <= INSET_DEPTH_SHARE * thickness {
+    if thickness <= 0.0 || within < INSET_DEPTH_SHARE * thickness {
         return None;
     }
     let edge = door.center().dot(towards_edge) + half_across;
