@@ -15,8 +15,8 @@ use serde::{Deserialize, Serialize};
 use crate::fit::{FitConfig, fit_part};
 use crate::kinematics::evidence::CONF_PINNED;
 use crate::kinematics::{
-    Joint, JointContext, JointEvidence, JointKind, JointSpec, KinematicsConfig, Template, Vocabulary, decide, estimate_joint,
-    parent_confidence,
+    Joint, JointContext, JointEvidence, JointKind, JointSpec, KinematicsConfig, Template, Vocabulary, decide, fit_joint,
+    hinge_edge_evidence, parent_confidence,
 };
 use crate::math::Vec3;
 use crate::model::{ContactEdge, ObjectModel, PartModel, SceneModel};
@@ -51,6 +51,10 @@ pub struct PinnedEdits {
     pub axis: BTreeMap<PartId, Vec3>,
     /// Joint limits (lower, upper), keyed by child part.
     pub limits: BTreeMap<PartId, (f32, f32)>,
+    /// The edge a person chose for a door's or lid's hinge, keyed by the door: a world direction
+    /// from the part's centre towards that edge.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub hinge_edge: BTreeMap<PartId, Vec3>,
 }
 
 /// Progress reporting for long stages (the CLI draws bars, the editor a spinner).
@@ -439,8 +443,9 @@ fn make_joint(
         handle: mounted(false),
         mount_normal,
         axis_line: decision.axis_line,
+        hinge_edge_world: edits.hinge_edge.get(&child).copied(),
     };
-    let mut joint = estimate_joint(parent, pp, child, cp, &spec, &cfg.kinematics);
+    let (mut joint, hinge_edge) = fit_joint(parent, pp, child, cp, &spec, &cfg.kinematics);
     if let Some(axis) = edits.axis.get(&child) {
         joint.axis_world = axis.normalize_or(joint.axis_world);
     }
@@ -452,7 +457,10 @@ fn make_joint(
     let (parent_rule, parent_conf) = parent_evidence(tree, parent, child, edits.parent.contains_key(&child));
     evidence.parent_rule = parent_rule;
     evidence.parent_confidence = parent_conf;
-    evidence.confidence = evidence.type_confidence * parent_conf;
+    if let Some(edge) = hinge_edge {
+        (evidence.axis_rule, evidence.axis_confidence) = hinge_edge_evidence(edge);
+    }
+    evidence.confidence = evidence.type_confidence * parent_conf * evidence.axis_confidence;
     (joint, evidence)
 }
 

@@ -248,6 +248,33 @@ fn the_review_queue_steps_to_the_least_certain_joint_and_a_fixed_joint_leaves_it
     assert!(queue(&h).contains(&second));
 }
 
+#[test]
+fn a_door_hinged_on_the_wrong_edge_moves_to_the_other_with_one_key_or_click() {
+    if !gpu_or_skip("a_door_hinged_on_the_wrong_edge_moves_to_the_other_with_one_click_or_key") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut h = editor(&dir.path().join("autosave.json"), (1500.0, 1500.0));
+    let m = model(&h);
+    let (door, ..) = door_handle_parent(&m);
+    let pivot = m.joint_of(door).unwrap().origin_world;
+    h.get_by_label(&part_name(&m, door)).click();
+    h.run_steps(2);
+    assert!(h.query_by_label("Other edge").is_some(), "the inspector offers to move a hinge");
+    // One key moves the hinge across the door (at least its width: an inset door's pins stand
+    // in the jambs beside it); the evidence says who chose it.
+    h.key_press(egui::Key::E);
+    h.run_steps(2);
+    let moved = model(&h);
+    let width = moved.part(door).unwrap().primitive.extent_along((moved.joint_of(door).unwrap().origin_world - pivot).normalize());
+    assert!((moved.joint_of(door).unwrap().origin_world - pivot).length() >= width - 1e-3, "{:?}", h.state().state.message);
+    assert!(h.query_by_label_contains("the edge a person chose").is_some(), "the evidence panel shows the person's choice");
+    // The review panel's button moves it back to the edge it came from.
+    h.get_by_label("Other hinge edge (E)").click();
+    h.run_steps(2);
+    assert!((model(&h).joint_of(door).unwrap().origin_world - pivot).length() < 1e-5);
+}
+
 /// Snapshot tolerance: lavapipe is deterministic on one machine; allow for small driver changes.
 fn snapshot_options() -> SnapshotOptions {
     SnapshotOptions::new().threshold(2.0).max_failed_pixels(2000)

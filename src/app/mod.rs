@@ -186,6 +186,9 @@ fn shortcuts(ctx: &egui::Context, commands: &mut Vec<AppCommand>) {
             if i.consume_key(Modifiers::NONE, Key::A) {
                 commands.push(AppCommand::ConfirmSelected);
             }
+            if i.consume_key(Modifiers::NONE, Key::E) {
+                commands.push(AppCommand::OtherEdgeSelected);
+            }
         });
     }
     let redo = KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);

@@ -434,7 +434,13 @@ pub fn inspector_ui(ui: &mut egui::Ui, state: &AppState, panels: &mut PanelState
             commands.push(AppCommand::Edit(EditCommand::SetLimits { child: id, lower: limits[0], upper: limits[1] }));
         }
         let o = joint.origin_world;
-        ui.label(format!("Pivot ({:.3}, {:.3}, {:.3}) m", o.x, o.y, o.z));
+        ui.horizontal(|ui| {
+            ui.label(format!("Pivot ({:.3}, {:.3}, {:.3}) m", o.x, o.y, o.z));
+            let hinged = super::review::evidence_of(model, id).is_some_and(super::review::is_hinged);
+            if hinged && ui.button("Other edge").on_hover_text("Move the hinge to the part's other edge (E)").clicked() {
+                commands.push(AppCommand::Edit(EditCommand::OtherHingeEdge { child: id }));
+            }
+        });
         let mut q = state.joint_q.get(&id).copied().unwrap_or(0.0);
         if ui.add(egui::Slider::new(&mut q, joint.lower..=joint.upper).text("Position")).changed() {
             commands.push(AppCommand::SetJointPosition { child: id, q });

@@ -1,7 +1,9 @@
 //! The review queue and the evidence of a joint: an annotator correcting hundreds of objects
 //! fixes the doubtful joints first. Every joint whose parent and type the annotator has not yet
-//! pinned (by fixing or confirming it) is in the queue, least confident first; `N` selects the
-//! next one, `A` confirms the selected joint as it is and moves on. The inspector shows why the
+//! pinned (by fixing or confirming it), or whose hinge edge is in doubt and not yet chosen, is in
+//! the queue, least confident first; `N` selects the
+//! next one, `A` confirms the selected joint as it is and moves on, `E` moves a door's or lid's
+//! hinge to its other edge (the doubt of a door with no handle). The inspector shows why the
 //! tool chose what it chose ([`evidence_ui`]).
 
 use eframe::egui::{self, Color32, RichText};
@@ -9,7 +11,7 @@ use eframe::egui::{self, Color32, RichText};
 use super::panels::part_name;
 use super::state::{AppCommand, AppState};
 use crate::edit::EditCommand;
-use crate::kinematics::JointEvidence;
+use crate::kinematics::{JointEvidence, Template};
 use crate::model::SceneModel;
 use crate::pipeline::PinnedEdits;
 use crate::scan::PartId;
@@ -25,18 +27,21 @@ const LISTED: usize = 8;
 pub struct ReviewItem {
     /// The joint's child part.
     pub child: PartId,
-    /// The tool's confidence in the joint's type and parent.
+    /// The tool's confidence in the joint's type, parent and axis.
     pub confidence: f32,
 }
 
-/// The joints not yet reviewed (neither parent nor type pinned), least confident first; ties by
-/// part id. A joint without evidence (an older scene file) counts as fully doubtful.
+/// The joints not yet reviewed (neither parent nor type pinned, or a hinge whose edge is in
+/// doubt and not chosen by a person), least confident first; ties by part id. A joint without
+/// evidence (an older scene file) counts as fully doubtful.
 #[must_use]
 pub fn review_queue(model: &SceneModel, pins: &PinnedEdits) -> Vec<ReviewItem> {
+    let edge_in_doubt =
+        |child: PartId| evidence_of(model, child).is_some_and(|e| e.axis_confidence < 1.0) && !pins.hinge_edge.contains_key(&child);
     let mut queue: Vec<ReviewItem> = model
         .joints
         .iter()
-        .filter(|j| !pins.parent.contains_key(&j.child) && !pins.joint_kind.contains_key(&j.child))
+        .filter(|j| (!pins.parent.contains_key(&j.child) && !pins.joint_kind.contains_key(&j.child)) || edge_in_doubt(j.child))
         .map(|j| ReviewItem { child: j.child, confidence: evidence_of(model, j.child).map_or(0.0, |e| e.confidence) })
         .collect();
     queue.sort_by(|a, b| a.confidence.total_cmp(&b.confidence).then(a.child.cmp(&b.child)));
@@ -51,6 +56,11 @@ pub fn next_in_queue(queue: &[ReviewItem], current: Option<PartId>) -> Option<Pa
         Some(i) => queue.get((i + 1) % queue.len()).map(|q| q.child),
         None => queue.first().map(|q| q.child),
     }
+}
+
+/// Whether the joint is a door's or lid's hinge (it has another edge to move to).
+pub(super) fn is_hinged(e: &JointEvidence) -> bool {
+    matches!(e.template, Template::Hinge | Template::LidHinge)
 }
 
 /// The evidence recorded for the joint above `child`.
@@ -83,6 +93,10 @@ pub fn review_ui(ui: &mut egui::Ui, state: &AppState, commands: &mut Vec<AppComm
         let selected_queued = state.selected.is_some_and(|s| queue.iter().any(|q| q.child == s));
         if ui.add_enabled(selected_queued, egui::Button::new("Confirm joint (A)")).clicked() {
             commands.push(AppCommand::ConfirmSelected);
+        }
+        let hinged = state.selected.and_then(|s| evidence_of(model, s)).is_some_and(is_hinged);
+        if ui.add_enabled(hinged, egui::Button::new("Other hinge edge (E)")).clicked() {
+            commands.push(AppCommand::OtherEdgeSelected);
         }
     });
     egui::Grid::new("review queue").num_columns(3).striped(true).show(ui, |ui| {
@@ -119,6 +133,9 @@ pub fn evidence_ui(ui: &mut egui::Ui, model: &SceneModel, child: PartId) {
         row(ui, "parent", format!("{:.2} — {}", e.parent_confidence, e.parent_rule));
         row(ui, "runner-up", e.runner_up.map_or_else(|| "none".to_owned(), |k| format!("{} (second choice)", k.name())));
         row(ui, "axis from", format!("{:?}", e.template).to_lowercase());
+        if !e.axis_rule.is_empty() {
+            row(ui, "axis", format!("{:.2} — {}", e.axis_confidence, e.axis_rule));
+        }
         for (i, test) in e.tests.iter().enumerate() {
             row(ui, if i == 0 { "tests" } else { "" }, test.clone());
         }
@@ -142,6 +159,10 @@ pub(super) fn apply(state: &mut AppState, command: &AppCommand) {
             let next = next_in_queue(&queue, Some(child)).filter(|n| *n != child);
             state.apply(AppCommand::Edit(EditCommand::Confirm { child }));
             state.apply(AppCommand::Select(next));
+        }
+        AppCommand::OtherEdgeSelected => {
+            let Some(child) = state.selected.filter(|s| evidence_of(doc.model(), *s).is_some_and(is_hinged)) else { return };
+            state.apply(AppCommand::Edit(EditCommand::OtherHingeEdge { child }));
         }
         _ => {}
     }

@@ -54,6 +54,8 @@ pub enum AppCommand {
     ReviewNext,
     /// Confirm the selected joint as it is (pins its parent and type) and select the next one.
     ConfirmSelected,
+    /// Move the selected door's or lid's hinge to its other edge.
+    OtherEdgeSelected,
 }
 
 /// A line for the status bar.
@@ -384,7 +386,7 @@ impl AppState {
                 self.camera.pitch_rad = framed.pitch_rad;
                 self.needs_framing = true;
             }
-            AppCommand::ReviewNext | AppCommand::ConfirmSelected => super::review::apply(self, &command),
+            AppCommand::ReviewNext | AppCommand::ConfirmSelected | AppCommand::OtherEdgeSelected => super::review::apply(self, &command),
         }
     }
 

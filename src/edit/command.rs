@@ -21,6 +21,10 @@ pub enum EditCommand {
     SetAxis { child: PartId, axis_world: Vec3 },
     /// Reverse the axis of the joint above `child` (and mirror its limits, so the motion range stays).
     FlipAxis { child: PartId },
+    /// Move the hinge of the door or lid `child` to the edge opposite the one it is on now (a
+    /// pinned axis is reversed with it, so the door still opens the way it did). Only for movable
+    /// joints hinged like a door or lid (templates `hinge`, `lid_hinge`).
+    OtherHingeEdge { child: PartId },
     /// Set the limits of the joint above `child` (radians or metres).
     SetLimits { child: PartId, lower: f32, upper: f32 },
     /// Replace the primitive of `part` by the best fit of another kind.
@@ -28,7 +32,7 @@ pub enum EditCommand {
     /// Forget every pin on `part` (its parent, joint and primitive go back to the pipeline's choice).
     Unpin { part: PartId },
     /// The annotator agrees with the joint above `child`: its parent and type are pinned as they
-    /// are (the joint leaves the review queue, and later runs keep it).
+    /// are, and a hinge's edge too (the joint leaves the review queue, and later runs keep it).
     Confirm { child: PartId },
 }
 
@@ -41,6 +45,7 @@ impl EditCommand {
             | EditCommand::SetJointKind { child, .. }
             | EditCommand::SetAxis { child, .. }
             | EditCommand::FlipAxis { child }
+            | EditCommand::OtherHingeEdge { child }
             | EditCommand::SetLimits { child, .. }
             | EditCommand::Confirm { child } => child,
             EditCommand::SetPrimitiveKind { part, .. } | EditCommand::Unpin { part } => part,
@@ -55,6 +60,7 @@ impl EditCommand {
             EditCommand::SetJointKind { child, kind } => format!("part {child}: joint -> {}", kind.name()),
             EditCommand::SetAxis { child, axis_world: a } => format!("part {child}: axis -> ({:.2}, {:.2}, {:.2})", a.x, a.y, a.z),
             EditCommand::FlipAxis { child } => format!("part {child}: axis flipped"),
+            EditCommand::OtherHingeEdge { child } => format!("part {child}: hinge moved to the other edge"),
             EditCommand::SetLimits { child, lower, upper } => format!("part {child}: limits -> [{lower:.3}, {upper:.3}]"),
             EditCommand::SetPrimitiveKind { part, kind } => format!("part {part}: primitive -> {}", kind.name()),
             EditCommand::Unpin { part } => format!("part {part}: pins cleared"),
@@ -71,6 +77,7 @@ pub fn is_pinned(pins: &PinnedEdits, part: PartId) -> bool {
         || pins.primitive_kind.contains_key(&part)
         || pins.axis.contains_key(&part)
         || pins.limits.contains_key(&part)
+        || pins.hinge_edge.contains_key(&part)
 }
 
 /// Removes every pin on `part` from `pins`.
@@ -78,6 +85,7 @@ pub fn unpin(pins: &mut PinnedEdits, part: PartId) {
     pins.parent.remove(&part);
     pins.joint_kind.remove(&part);
     pins.primitive_kind.remove(&part);
+    pins.hinge_edge.remove(&part);
     pins.axis.remove(&part);
     pins.limits.remove(&part);
 }

@@ -15,7 +15,8 @@ pub use command::{EditCommand, is_pinned, unpin};
 pub use session::{SESSION_FORMAT, SceneSource, Session};
 
 use crate::export::{ExportError, SceneFiles, UrdfConfig, write_scene_files};
-use crate::kinematics::JointKind;
+use crate::kinematics::{JointKind, Template};
+use crate::math::Vec3;
 use crate::model::{PartModel, SceneModel};
 use crate::pipeline::{FittedParts, FloorHint, PinnedEdits, PipelineConfig, Progress, assemble, fit_one_part, fit_parts};
 use crate::primitive::PrimitiveKind;
@@ -299,6 +300,18 @@ impl Document {
                     pins.limits.insert(child, (-j.upper, -j.lower));
                 }
             }
+            EditCommand::OtherHingeEdge { child } => {
+                needs_joint()?;
+                let Some(edge) = self.hinge_edge_of(child) else {
+                    return Err(EditError::Refused(format!("part {child} is not hinged like a door or lid: it has no other edge")));
+                };
+                pins.hinge_edge.insert(child, -edge);
+                // Mirrored through the door's centre, the hinge opens outward about the reversed
+                // axis: a pinned axis turns with it, so the pinned limits keep their meaning.
+                if let Some(axis) = pins.axis.get_mut(&child) {
+                    *axis = -*axis;
+                }
+            }
             EditCommand::SetLimits { child, lower, upper } => {
                 needs_joint()?;
                 if !lower.is_finite() || !upper.is_finite() || lower > upper {
@@ -320,9 +333,23 @@ impl Document {
                 let j = needs_joint()?;
                 pins.parent.insert(child, j.parent);
                 pins.joint_kind.insert(child, j.kind);
+                if let Some(edge) = self.hinge_edge_of(child) {
+                    pins.hinge_edge.insert(child, edge);
+                }
             }
         }
         Ok(())
+    }
+
+    /// Where the hinge of the door or lid `child` stands now: a world direction from the part's
+    /// centre towards its edge, or `None` when its joint is not a movable door or lid hinge.
+    fn hinge_edge_of(&self, child: PartId) -> Option<Vec3> {
+        let joint = self.model.joint_of(child).filter(|j| j.kind.is_movable())?;
+        let hinged = self.model.evidence.iter().any(|e| e.child == child && matches!(e.template, Template::Hinge | Template::LidHinge));
+        let centre = self.model.part(child)?.primitive.center();
+        let r = joint.origin_world - centre;
+        let across = r - joint.axis_world * r.dot(joint.axis_world);
+        (hinged && across.length() > 1e-4).then(|| across.normalize())
     }
 
     /// The fit of `part` as a `kind` (cached), or `None` when the scan has no such part.

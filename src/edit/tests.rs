@@ -29,6 +29,11 @@ fn door_with_handle(doc: &Document) -> (PartId, PartId, PartId) {
         .unwrap()
 }
 
+/// A door or lid of the demo hinged by the `hinge` or `lid_hinge` template.
+fn hinged_door(doc: &Document) -> PartId {
+    doc.model().evidence.iter().find(|e| matches!(e.template, Template::Hinge | Template::LidHinge)).unwrap().child
+}
+
 /// Applies `cmd` to the demo and checks the outcome: `Ok(check)` runs `check` on the edited
 /// document, `Err(text)` expects a refusal whose message contains `text` and an unchanged scene.
 /// Checks run on (before, after) an edit that succeeded.
@@ -109,6 +114,32 @@ fn edits_are_pinned_and_refusals_change_nothing() {
             assert_eq!((b.lower, b.upper), (-a.upper, -a.lower));
         }),
     );
+    // A hinge moved to its door's other edge: the pivot mirrors through the door's centre, the
+    // evidence says a person chose it, and the axis still opens the door outward.
+    check(
+        |d| EditCommand::OtherHingeEdge { child: hinged_door(d) },
+        Ok(&|before, after| {
+            let door = hinged_door(before);
+            let (a, b) = (before.model().joint_of(door).unwrap(), after.model().joint_of(door).unwrap());
+            // The pivot moves across the door, at least its width, to the other side of its centre.
+            let primitive = &before.model().part(door).unwrap().primitive;
+            let moved = b.origin_world - a.origin_world;
+            let across = moved.normalize();
+            assert!(across.dot(a.axis_world).abs() < 1e-3, "{a:?} -> {b:?}");
+            assert!(moved.length() >= primitive.extent_along(across) - 1e-3, "{a:?} -> {b:?}");
+            let centre = primitive.center();
+            assert!((a.origin_world - centre).dot(across) < 0.0 && (b.origin_world - centre).dot(across) > 0.0);
+            // Both open the door the same way.
+            let step = |j: &crate::kinematics::Joint| j.axis_world.cross(centre - j.origin_world);
+            let normal = a.axis_world.cross(across);
+            assert!(step(a).dot(normal) * step(b).dot(normal) > 0.0, "both open outward: {a:?} {b:?}");
+            let e = after.model().evidence.iter().find(|e| e.child == door).unwrap();
+            assert!(e.axis_rule.contains("a person chose") && (e.axis_confidence - 1.0).abs() < 1e-6, "{e:?}");
+            assert!(after.pins().hinge_edge.contains_key(&door) && is_pinned(after.pins(), door));
+        }),
+    );
+    // A handle has no hinge edge to move.
+    check(|d| EditCommand::OtherHingeEdge { child: door_with_handle(d).2 }, Err("no other edge"));
     // Confirming a joint pins its parent and type as they are; the scene does not change.
     check(
         |d| EditCommand::Confirm { child: door_with_handle(d).0 },
@@ -151,6 +182,52 @@ fn undo_and_redo_give_back_exactly_the_scene_before_and_after() {
     doc.undo();
     doc.apply(EditCommand::FlipAxis { child: door }).unwrap();
     assert!(doc.redo_label().is_none());
+}
+
+#[test]
+fn moving_a_hinge_to_the_other_edge_twice_puts_it_back() {
+    let mut doc = demo();
+    let door = hinged_door(&doc);
+    let original = doc.model().joint_of(door).copied().unwrap();
+    doc.apply(EditCommand::OtherHingeEdge { child: door }).unwrap();
+    assert_ne!(doc.model().joint_of(door).unwrap().origin_world, original.origin_world);
+    doc.apply(EditCommand::OtherHingeEdge { child: door }).unwrap();
+    let back = doc.model().joint_of(door).copied().unwrap();
+    assert!((back.origin_world - original.origin_world).length() < 1e-5 && back.axis_world.dot(original.axis_world) > 0.9999);
+}
+
+#[test]
+fn a_flipped_axis_still_opens_the_door_outward_after_its_hinge_moves_to_the_other_edge() {
+    // Regression: moving the edge dropped the pinned (flipped) axis and kept the mirrored
+    // limits, so the door swung into its cabinet.
+    let mut doc = demo();
+    let door = hinged_door(&doc);
+    let centre = doc.model().part(door).unwrap().primitive.center();
+    // Where the door's centre goes at the far end of its range.
+    let open_centre = |d: &Document| {
+        let j = d.model().joint_of(door).copied().unwrap();
+        let q = if j.upper.abs() >= j.lower.abs() { j.upper } else { j.lower };
+        j.origin_world + crate::math::Quat::from_axis_angle(j.axis_world, q) * (centre - j.origin_world)
+    };
+    let outward = open_centre(&doc) - centre;
+    doc.apply(EditCommand::FlipAxis { child: door }).unwrap();
+    assert!((open_centre(&doc) - centre).dot(outward) > 0.0);
+    doc.apply(EditCommand::OtherHingeEdge { child: door }).unwrap();
+    let j = doc.model().joint_of(door).copied().unwrap();
+    // The door's outward normal: across the axis and the door, on the side it first opened to.
+    let normal = j.axis_world.cross(centre - j.origin_world).normalize();
+    let normal = if normal.dot(outward) < 0.0 { -normal } else { normal };
+    assert!(outward.dot(normal) > 0.05);
+    assert!((open_centre(&doc) - centre).dot(normal) > 0.05, "opens into its parent: {j:?}");
+}
+
+#[test]
+fn confirming_a_door_pins_its_hinge_edge() {
+    let mut doc = demo();
+    let door = hinged_door(&doc);
+    doc.apply(EditCommand::Confirm { child: door }).unwrap();
+    assert!(doc.pins().hinge_edge.contains_key(&door));
+    assert_eq!(doc.model().evidence.iter().find(|e| e.child == door).unwrap().axis_rule, "hinge on the edge a person chose");
 }
 
 #[test]

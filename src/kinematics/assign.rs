@@ -6,7 +6,7 @@
 //! | --- | --- | --- | --- | --- |
 //! | fixed | fixed | — | child centre | 0 |
 //! | drawer | prismatic | the parent's face normal the part sits on, outward | child centre | 0 .. `drawer_travel` × parent depth |
-//! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one; a lid's longer edge towards the parent's centre) | on that edge, at the door's back face; a door set into its parent's opening (half its thickness or more within the parent's depth): in the jamb beside the edge, at mid-thickness | 0 .. `revolute_upper_rad` |
+//! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one, on the outer edge; a lid's longer edge towards the parent's centre; centred on the parent without a grip: either edge, [`HingeEdge::Undetermined`]) | on that edge, at the door's back face; a door set into its parent's opening (half its thickness or more within the parent's depth): in the jamb beside the edge, at mid-thickness | 0 .. `revolute_upper_rad` |
 //! | `sliding_panel` | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
 //! | knob | revolute | the outward face normal (or the round axis a test found; touching nothing, a disc's thin axis) | knob centre | −π .. π |
 //! | lever | revolute | the outward face normal | a bar (≥ `lever_min_elongation` × as long as wide across the axis): its end away from a grip on it, else the end nearer the parent's centre; otherwise, or through its mount, its centre | −π .. π |
@@ -96,7 +96,30 @@ pub struct JointSpec {
     pub mount_normal: Option<Vec3>,
     /// An axis and a point on it fixed by a geometric test (swing handles, lift-off lids, discs).
     pub axis_line: Option<(Vec3, Vec3)>,
+    /// The edge a person chose for a door's or lid's hinge: a world direction from the part's
+    /// centre towards it ([`crate::edit::EditCommand::OtherHingeEdge`]).
+    pub hinge_edge_world: Option<Vec3>,
 }
+
+/// How a hinge's edge was chosen ([`fit_joint`]); the evidence states it with a confidence.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HingeEdge {
+    /// The edge away from a handle, knob or latch on the part (the grip marks the free edge).
+    AwayFromGrip,
+    /// No grip, a side door off-centre on its parent: its outer edge (double doors hinge outside).
+    OuterEdge,
+    /// No grip, a lid off-centre on its parent: its long edge towards the parent's centre.
+    TowardsParentCentre,
+    /// No grip and centred on its parent (within [`CENTRED_ON_PARENT`] of its half-width):
+    /// nothing in the geometry tells the two edges apart; one is taken.
+    Undetermined,
+    /// The edge a person chose.
+    Pinned,
+}
+
+/// A door or lid whose centre lies within this fraction of its half-width (across the hinge)
+/// of its parent's centre is centred on it: its offset says nothing of its hinge side.
+pub const CENTRED_ON_PARENT: f32 = 0.1;
 
 /// Estimates the joint between `parent` and `child` ([`JointSpec`]; templates in the module
 /// docs). The mount normal is the direction a drawer slides, a door opens towards, a knob turns
@@ -112,6 +135,19 @@ pub fn estimate_joint(
     spec: &JointSpec,
     cfg: &KinematicsConfig,
 ) -> Joint {
+    fit_joint(parent_id, parent, child_id, child, spec, cfg).0
+}
+
+/// [`estimate_joint`], with how a hinge's edge was chosen (`None` for other templates).
+#[must_use]
+pub fn fit_joint(
+    parent_id: PartId,
+    parent: &Primitive,
+    child_id: PartId,
+    child: &Primitive,
+    spec: &JointSpec,
+    cfg: &KinematicsConfig,
+) -> (Joint, Option<HingeEdge>) {
     let side_opening = matches!(spec.template, Template::SlidingPanel | Template::Drawer | Template::Hinge);
     let out = match spec.mount_normal {
         Some(n) if !(side_opening && n.dot(UP).abs() > 0.7) => n.normalize_or(Vec3::Z),
@@ -121,36 +157,12 @@ pub fn estimate_joint(
     let mut joint =
         Joint { parent: parent_id, child: child_id, kind, axis_world: out, origin_world: child.center(), lower: 0.0, upper: 0.0 };
     if kind == JointKind::Fixed {
-        return joint;
+        return (joint, None);
     }
+    let mut hinge_edge = None;
     match spec.template {
         Template::Fixed => {}
-        Template::SlidingPanel => {
-            // In its own plane, along the panel's box axis that points towards the parent's
-            // centre: that is where the panel has room to go (a sliding door over half a front,
-            // a sash over the lower half of its frame); travel up to that gap. The plane is the
-            // panel's own (its thinnest axis is its normal) where it is a panel: a sash touching
-            // no frame face has no mount normal to go by.
-            // A panel standing out of the face it is mounted on (a desk's sliding cover on its
-            // top) runs along that face: the in-plane axis across the mount normal.
-            let normal = panel_normal(child).unwrap_or(out);
-            let towards = parent.center() - child.center();
-            let in_plane = towards - normal * towards.dot(normal);
-            let axes = child.axes_world();
-            let stands_out =
-                child.center().dot(out) + 0.5 * child.extent_along(out) > parent.center().dot(out) + 0.5 * parent.extent_along(out);
-            let along_mount = (stands_out && normal.dot(out).abs() < 0.5).then(|| normal.cross(out).normalize_or_zero());
-            let axis = along_mount.filter(|a| *a != Vec3::ZERO).unwrap_or_else(|| {
-                axes.iter()
-                    .filter(|a| a.dot(normal).abs() < 0.5)
-                    .max_by(|a, b| a.dot(in_plane).abs().total_cmp(&b.dot(in_plane).abs()))
-                    .copied()
-                    .unwrap_or(axes[0])
-            });
-            let axis = if axis.dot(in_plane) < 0.0 { -axis } else { axis };
-            joint.axis_world = axis;
-            joint.upper = (2.0 * in_plane.dot(axis)).max(0.0).min(parent.extent_along(axis));
-        }
+        Template::SlidingPanel => (joint.axis_world, joint.upper) = slide_in_plane(parent, child, out),
         Template::Button => {
             // A round cap is pressed along its own axis, into the parent; else into the face.
             joint.axis_world = match child.kind {
@@ -190,7 +202,7 @@ pub fn estimate_joint(
                 // A lever's pivot line, found by its test.
                 joint.axis_world = axis;
                 joint.origin_world = pivot;
-                return joint;
+                return (joint, None);
             }
             // About the in-plane box axis along the shorter side, through the centre.
             let axes = child.axes_world();
@@ -201,9 +213,10 @@ pub fn estimate_joint(
             joint.axis_world = axis;
         }
         Template::Hinge | Template::LidHinge => {
-            let (axis, pivot) = hinge(parent, child, out, spec.handle);
+            let (axis, pivot, edge) = hinge(parent, child, out, spec.handle, spec.hinge_edge_world);
             joint.axis_world = axis;
             joint.origin_world = pivot;
+            hinge_edge = Some(edge);
             joint.upper = cfg.revolute_upper_rad;
         }
         Template::LiftOff => {
@@ -229,7 +242,32 @@ pub fn estimate_joint(
             joint.upper = std::f32::consts::PI;
         }
     }
-    joint
+    (joint, hinge_edge)
+}
+
+/// Axis and travel of a sliding panel: in its own plane, along the panel's box axis that points
+/// towards the parent's centre: that is where the panel has room to go (a sliding door over half
+/// a front, a sash over the lower half of its frame); travel up to that gap. The plane is the
+/// panel's own (its thinnest axis is its normal) where it is a panel: a sash touching no frame
+/// face has no mount normal to go by. A panel standing out of the face it is mounted on (a
+/// desk's sliding cover on its top) runs along that face: the in-plane axis across the mount
+/// normal `out`.
+fn slide_in_plane(parent: &Primitive, child: &Primitive, out: Vec3) -> (Vec3, f32) {
+    let normal = panel_normal(child).unwrap_or(out);
+    let towards = parent.center() - child.center();
+    let in_plane = towards - normal * towards.dot(normal);
+    let axes = child.axes_world();
+    let stands_out = child.center().dot(out) + 0.5 * child.extent_along(out) > parent.center().dot(out) + 0.5 * parent.extent_along(out);
+    let along_mount = (stands_out && normal.dot(out).abs() < 0.5).then(|| normal.cross(out).normalize_or_zero());
+    let axis = along_mount.filter(|a| *a != Vec3::ZERO).unwrap_or_else(|| {
+        axes.iter()
+            .filter(|a| a.dot(normal).abs() < 0.5)
+            .max_by(|a, b| a.dot(in_plane).abs().total_cmp(&b.dot(in_plane).abs()))
+            .copied()
+            .unwrap_or(axes[0])
+    });
+    let axis = if axis.dot(in_plane) < 0.0 { -axis } else { axis };
+    (axis, (2.0 * in_plane.dot(axis)).max(0.0).min(parent.extent_along(axis)))
 }
 
 /// Where a lever turning about `axis` is pivoted: a bar (its longest extent across the axis at
@@ -345,45 +383,24 @@ pub fn joint_from_handle(parent: &Primitive, child: &Primitive, handle: Vec3) ->
     thin.then_some((JointKind::Revolute, n))
 }
 
-/// Full extent of a primitive along a world direction.
-/// Hinge line of a door: direction (signed so a positive angle opens outward) and a pivot point.
-fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, handle: Option<Vec3>) -> (Vec3, Vec3) {
+/// Hinge line of a door or lid: direction (signed so a positive angle opens outward), a pivot
+/// point, and how its edge was chosen. `pinned_edge` (a person's choice: a world direction from
+/// the part's centre towards the edge) overrides the rules.
+fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, handle: Option<Vec3>, pinned_edge: Option<Vec3>) -> (Vec3, Vec3, HingeEdge) {
     let axes = door.axes_world();
     let half = door.size * 0.5;
     let thick = (0..3).max_by(|&a, &b| axes[a].dot(out).abs().total_cmp(&axes[b].dot(out).abs())).unwrap_or(2);
-    let (i1, i2) = ((thick + 1) % 3, (thick + 2) % 3);
+    let in_plane = ((thick + 1) % 3, (thick + 2) % 3);
     let c = door.center();
-    // Which in-plane axis carries the handle offset, and on which side.
-    let from_handle = handle.and_then(|h| {
-        let d = h - c;
-        let r1 = d.dot(axes[i1]) / half[i1].max(1e-3);
-        let r2 = d.dot(axes[i2]) / half[i2].max(1e-3);
-        if r1.abs().max(r2.abs()) < 0.1 {
-            return None; // centred handle: no cue
-        }
-        // The hinge runs along the other axis, on the edge away from the handle.
-        Some(if r1.abs() >= r2.abs() { (i2, i1, -r1.signum()) } else { (i1, i2, -r2.signum()) })
+    let pinned = pinned_edge.and_then(|dir| {
+        // The in-plane axis the chosen edge lies across, and its side.
+        let (i1, i2) = in_plane;
+        let (h, a) = if axes[i1].dot(dir).abs() >= axes[i2].dot(dir).abs() { (i2, i1) } else { (i1, i2) };
+        let along = axes[a].dot(dir);
+        (along.abs() > 1e-3).then(|| (h, a, along.signum(), HingeEdge::Pinned))
     });
-    let (hinge_axis, across, side) = from_handle.unwrap_or_else(|| {
-        let vertical_out = out.dot(UP).abs() > 0.7;
-        let (h, a) = if vertical_out {
-            // A lid: hinge along its longer side, on the side towards the parent's centre.
-            if half[i1] >= half[i2] { (i1, i2) } else { (i2, i1) }
-        } else if axes[i1].dot(UP).abs() >= axes[i2].dot(UP).abs() {
-            (i1, i2) // a side door: vertical hinge
-        } else {
-            (i2, i1)
-        };
-        let towards_parent = (parent.center() - c).dot(axes[a]);
-        let side = if vertical_out {
-            if towards_parent >= 0.0 { 1.0 } else { -1.0 }
-        } else if towards_parent > 0.0 {
-            -1.0 // the outer edge, away from the parent's centre (double doors hinge outside)
-        } else {
-            1.0
-        };
-        (h, a, side)
-    });
+    let (hinge_axis, across, side, edge) =
+        pinned.or_else(|| edge_from_grip(door, handle, in_plane)).unwrap_or_else(|| edge_without_grip(parent, door, out, in_plane));
     let pivot = match inset_pin_offset(parent, door, axes[across] * side, out, half[across]) {
         // An inset door: its pin stands in the jamb beside its edge, at mid-thickness.
         Some(past_edge) => c + axes[across] * (side * (half[across] + past_edge)),
@@ -394,7 +411,62 @@ fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, handle: Option<Vec3>) 
     if axis.cross(c - pivot).dot(out) < 0.0 {
         axis = -axis;
     }
-    (axis, pivot)
+    (axis, pivot, edge)
+}
+
+/// A hinge's (axis index, across index, side along the across axis, how chosen) from a grip
+/// mounted off the door's centre: the hinge runs along the other in-plane axis, on the edge away
+/// from the grip. `None` for a grip near the centre (within a tenth of the half-size): no cue.
+fn edge_from_grip(door: &Primitive, handle: Option<Vec3>, (i1, i2): (usize, usize)) -> Option<(usize, usize, f32, HingeEdge)> {
+    let axes = door.axes_world();
+    let half = door.size * 0.5;
+    let d = handle? - door.center();
+    let r1 = d.dot(axes[i1]) / half[i1].max(1e-3);
+    let r2 = d.dot(axes[i2]) / half[i2].max(1e-3);
+    if r1.abs().max(r2.abs()) < 0.1 {
+        return None;
+    }
+    Some(if r1.abs() >= r2.abs() {
+        (i2, i1, -r1.signum(), HingeEdge::AwayFromGrip)
+    } else {
+        (i1, i2, -r2.signum(), HingeEdge::AwayFromGrip)
+    })
+}
+
+/// The hinge of a door or lid with no grip off its centre: (hinge axis index, across axis
+/// index, side along the across axis, how chosen). A side door hinges about its vertical
+/// in-plane axis, on the outer edge, away from its parent's centre (double doors hinge outside);
+/// a lid along its longer side, on the edge towards its parent's centre. A part centred on its
+/// parent shows no side: the rule still gives one (deterministically), marked
+/// [`HingeEdge::Undetermined`].
+fn edge_without_grip(parent: &Primitive, door: &Primitive, out: Vec3, (i1, i2): (usize, usize)) -> (usize, usize, f32, HingeEdge) {
+    let axes = door.axes_world();
+    let half = door.size * 0.5;
+    let vertical_out = out.dot(UP).abs() > 0.7;
+    let (h, a) = if vertical_out {
+        // A lid: hinge along its longer side.
+        if half[i1] >= half[i2] { (i1, i2) } else { (i2, i1) }
+    } else if axes[i1].dot(UP).abs() >= axes[i2].dot(UP).abs() {
+        (i1, i2) // a side door: vertical hinge
+    } else {
+        (i2, i1)
+    };
+    let towards_parent = (parent.center() - door.center()).dot(axes[a]);
+    let side = if vertical_out {
+        if towards_parent >= 0.0 { 1.0 } else { -1.0 }
+    } else if towards_parent > 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let edge = if towards_parent.abs() < CENTRED_ON_PARENT * half[a] {
+        HingeEdge::Undetermined
+    } else if vertical_out {
+        HingeEdge::TowardsParentCentre
+    } else {
+        HingeEdge::OuterEdge
+    };
+    (h, a, side, edge)
 }
 
 /// Least share of a door's thickness that must lie within the parent's depth for the door to be
@@ -431,7 +503,7 @@ mod tests {
     use super::*;
 
     fn spec(kind: JointKind, template: Template, handle: Option<Vec3>, mount_normal: Option<Vec3>) -> JointSpec {
-        JointSpec { kind, template, handle, mount_normal, axis_line: None }
+        JointSpec { kind, template, handle, mount_normal, axis_line: None, hinge_edge_world: None }
     }
 
     /// What [`joint_from_handle`] makes of `child` on `parent` with a handle at `handle`.
@@ -600,6 +672,51 @@ mod tests {
         let q = crate::math::Quat::from_axis_angle(j.axis_world, 0.3);
         let moved = j.origin_world + q * (door.center() - j.origin_world);
         assert!(moved.y > door.center().y);
+    }
+
+    /// How [`fit_joint`] chooses the edge of `door` (hinge template, on the cabinet body) and
+    /// where its pivot lands; any edge opens outward, away from the body, for a positive angle.
+    fn check_edge(door: &Primitive, handle: Option<Vec3>, pinned: Option<Vec3>, expected: (HingeEdge, Vec3)) {
+        let lid = door.center().z > 1.0;
+        let template = if lid { Template::LidHinge } else { Template::Hinge };
+        let out = if lid { Vec3::Z } else { Vec3::Y };
+        let spec = JointSpec { hinge_edge_world: pinned, ..spec(JointKind::Revolute, template, handle, Some(out)) };
+        let (j, edge) = fit_joint(1, &cabinet_body(), 2, door, &spec, &KinematicsConfig::default());
+        assert!(
+            edge == Some(expected.0) && (j.origin_world - expected.1).length() < 1e-5,
+            "{door:?}, handle {handle:?}, pinned {pinned:?}: {edge:?} at {}, expected {expected:?}",
+            j.origin_world
+        );
+        let q = crate::math::Quat::from_axis_angle(j.axis_world, 0.3);
+        assert!((j.origin_world + q * (door.center() - j.origin_world)).dot(out) > door.center().dot(out), "{j:?}");
+    }
+
+    #[test]
+    fn a_hinge_edge_comes_from_a_grip_or_the_offset_is_undetermined_on_a_centred_part_and_a_person_can_choose_it() {
+        let door = |x: f32| Primitive::cuboid_at(Vec3::new(x, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
+        let at = |x: f32| Vec3::new(x, 0.25, 0.5);
+        // A handle decides.
+        check_edge(&door(0.0), Some(Vec3::new(0.16, 0.29, 0.5)), None, (HingeEdge::AwayFromGrip, at(-0.2)));
+        // Double doors, no handles: the outer edges.
+        check_edge(&door(0.2), None, None, (HingeEdge::OuterEdge, at(0.4)));
+        check_edge(&door(-0.2), None, None, (HingeEdge::OuterEdge, at(-0.4)));
+        // Just off centre (beyond a tenth of its half-width) the offset counts; within, it does not.
+        check_edge(&door(0.021), None, None, (HingeEdge::OuterEdge, at(0.221)));
+        check_edge(&door(0.019), None, None, (HingeEdge::Undetermined, at(0.219)));
+        check_edge(&door(0.0), None, None, (HingeEdge::Undetermined, at(0.2)));
+        // A grip at the door's centre is no cue.
+        check_edge(&door(0.0), Some(Vec3::new(0.01, 0.29, 0.5)), None, (HingeEdge::Undetermined, at(0.2)));
+        // A person's choice wins, whatever the rules say, and keeps the door opening outward.
+        check_edge(&door(0.0), None, Some(Vec3::NEG_X), (HingeEdge::Pinned, at(-0.2)));
+        check_edge(&door(0.2), None, Some(Vec3::new(-1.0, 0.1, 0.0)), (HingeEdge::Pinned, at(0.0)));
+        check_edge(&door(0.0), Some(Vec3::new(0.16, 0.29, 0.5)), Some(Vec3::X), (HingeEdge::Pinned, at(0.2)));
+        // An edge along the other in-plane axis: a door hinged at its bottom like an oven's.
+        check_edge(&door(0.0), None, Some(Vec3::NEG_Z), (HingeEdge::Pinned, Vec3::new(0.0, 0.25, 0.05)));
+        // A lid: its long edge towards the body's centre; centred, undetermined; chosen, pinned.
+        let lid = |y: f32| Primitive::cuboid_at(Vec3::new(0.0, y, 1.01), Vec3::new(0.8, 0.4, 0.02));
+        check_edge(&lid(0.05), None, None, (HingeEdge::TowardsParentCentre, Vec3::new(0.0, -0.15, 1.0)));
+        check_edge(&lid(0.0), None, None, (HingeEdge::Undetermined, Vec3::new(0.0, 0.2, 1.0)));
+        check_edge(&lid(0.0), None, Some(Vec3::NEG_Y), (HingeEdge::Pinned, Vec3::new(0.0, -0.2, 1.0)));
     }
 
     #[test]

@@ -27,16 +27,17 @@
 //! - **spinning disc** (unknown labels): a cylinder no taller than 0.7× its diameter whose axis
 //!   is horizontal (within 17°) spins about that axis, as wheels do.
 //!
-//! Confidence is the product of a type confidence (how the type was chosen: the constants below)
-//! and a parent confidence (the margin of the chosen parent's contact weight over the next
-//! candidate's, [`parent_confidence`]). `partscene bench` prints how often joints above 0.9 are
+//! Confidence is the product of a type confidence (how the type was chosen: the constants below),
+//! a parent confidence (the margin of the chosen parent's contact weight over the next
+//! candidate's, [`parent_confidence`]) and an axis confidence (a hinge's edge where nothing tells
+//! it, [`hinge_edge_evidence`]; 1 elsewhere). `partscene bench` prints how often joints above 0.9 are
 //! right.
 
 use std::fmt::Write as _;
 
 use serde::{Deserialize, Serialize};
 
-use super::assign::{joint_from_handle, outward_direction};
+use super::assign::{HingeEdge, joint_from_handle, outward_direction};
 use super::joint::JointKind;
 use super::vocabulary::{GeometryTest, LabelMatch, Role, Template, Vocabulary};
 use crate::math::{UP, Vec3};
@@ -63,9 +64,12 @@ pub const CONF_MOTION_WORD_ONLY: f32 = 0.7;
 pub const CONF_UNKNOWN_RIGID: f32 = 0.6;
 /// Parent confidence of a part touching nothing (hung off the nearest part).
 pub const CONF_NO_CONTACT_PARENT: f32 = 0.4;
+/// Axis confidence of a hinge whose side nothing tells (no grip, centred on its parent): one of
+/// two edges, a coin flip.
+pub const CONF_HINGE_EDGE_UNDETERMINED: f32 = 0.5;
 
 /// Why a joint has its type, parent and axis, and how sure the tool is.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct JointEvidence {
     /// The joint's child part.
     pub child: PartId,
@@ -83,8 +87,56 @@ pub struct JointEvidence {
     pub type_confidence: f32,
     /// Confidence in the parent, in [0, 1].
     pub parent_confidence: f32,
-    /// `type_confidence × parent_confidence`.
+    /// How the axis line was placed where a rule chose between alternatives (a hinge's edge);
+    /// empty where the template alone fixes it.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub axis_rule: String,
+    /// Confidence in that choice, in [0, 1] (1 where nothing was chosen).
+    #[serde(default = "one")]
+    pub axis_confidence: f32,
+    /// `type_confidence × parent_confidence × axis_confidence`.
     pub confidence: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+impl Default for JointEvidence {
+    fn default() -> Self {
+        Self {
+            child: 0,
+            label_rule: String::new(),
+            tests: Vec::new(),
+            template: Template::default(),
+            parent_rule: String::new(),
+            runner_up: None,
+            type_confidence: 0.0,
+            parent_confidence: 0.0,
+            axis_rule: String::new(),
+            axis_confidence: 1.0,
+            confidence: 0.0,
+        }
+    }
+}
+
+/// Why a hinge stands on its edge, and the axis confidence ([`HingeEdge`]).
+#[must_use]
+pub fn hinge_edge_evidence(edge: HingeEdge) -> (String, f32) {
+    match edge {
+        HingeEdge::AwayFromGrip => ("hinge on the edge away from the grip mounted on the part".into(), 1.0),
+        HingeEdge::OuterEdge => {
+            ("no grip: hinge on the door's outer edge, away from its parent's centre (double doors hinge outside)".into(), 1.0)
+        }
+        HingeEdge::TowardsParentCentre => ("no grip off its centre: hinge on the lid's long edge towards its parent's centre".into(), 1.0),
+        HingeEdge::Undetermined => (
+            "no grip off its centre, and centred on its parent: nothing tells its two edges apart; one taken (runner-up: the other edge; \
+             `Other edge` moves the hinge there)"
+                .into(),
+            CONF_HINGE_EDGE_UNDETERMINED,
+        ),
+        HingeEdge::Pinned => ("hinge on the edge a person chose".into(), CONF_PINNED),
+    }
 }
 
 /// What [`decide`] needs to know about a part and its surroundings.
