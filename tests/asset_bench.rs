@@ -118,8 +118,15 @@ fn one_shared_object_runs_end_to_end() {
         assert!(row.chamfer.expect("chamfer") < 0.1, "{:?}", row.chamfer);
         assert!(setting.metrics.summary.movable_correct_types == 2, "both doors revolute");
     }
+    // Neither door carries a grip and both are centred on the body: nothing tells their hinge
+    // edges apart, and the tool says so for both (whichever edge it took).
+    for totals in [&report.partial, &report.clean] {
+        assert_eq!(totals.hinges_in_doubt, 2, "{totals:?}");
+        assert_eq!(totals.hinges_in_doubt_off, totals.hinges_off, "every hinge off its edge is in doubt: {totals:?}");
+    }
     let md = report.markdown();
     assert!(md.contains("Refrigerator") && md.contains("| **all** (1) | clean |"), "{md}");
+    assert!(md.contains("- clean: 2 in doubt"), "{md}");
 }
 
 #[test]

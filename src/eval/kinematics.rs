@@ -96,6 +96,10 @@ pub struct JointRow {
     /// The model's confidence in its joint ([`crate::kinematics::JointEvidence`]), when it has one.
     #[serde(default)]
     pub confidence: Option<f32>,
+    /// The model's confidence in how it placed the axis line (a hinge's edge; 1 where nothing
+    /// was chosen), when it has evidence.
+    #[serde(default)]
+    pub axis_confidence: Option<f32>,
     /// Undirected angle between the axes, degrees: movable truth joints with the right type only.
     pub axis_error_deg: Option<f32>,
     /// Distance between the hinge lines, metres: revolute joints with the right type only.
@@ -178,7 +182,8 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
                 .any(|j| (j.child == t.child && body(j.parent) == body(t.parent)) || (j.parent == t.child && j.child == t.parent));
             let parent_correct = joined_to_parent_body && !part_missing;
             let parent_same_part = same_pair.is_some() && !part_missing;
-            let confidence = predicted.and_then(|p| model.evidence.iter().find(|e| e.child == p.child)).map(|e| e.confidence);
+            let evidence = predicted.and_then(|p| model.evidence.iter().find(|e| e.child == p.child));
+            let (confidence, axis_confidence) = (evidence.map(|e| e.confidence), evidence.map(|e| e.axis_confidence));
             JointRow {
                 child: t.child,
                 truth_kind: t.kind,
@@ -188,6 +193,7 @@ pub(crate) fn joint_rows(model: &SceneModel, truth: &TruthObject) -> Vec<JointRo
                 parent_correct,
                 parent_same_part,
                 confidence,
+                axis_confidence,
                 axis_error_deg,
                 hinge_distance_m,
                 prismatic_origin_distance_m,
