@@ -85,7 +85,7 @@ pub fn outward_direction(parent: &Primitive, child: &Primitive, handle: Option<V
     best.1
 }
 
-/// What [`estimate_joint`] fits: the type, its template, and what the geometry already told.
+/// What [`fit_joint`] fits: the type, its template, and what the geometry already told.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointSpec {
     pub kind: JointKind,
@@ -125,20 +125,8 @@ pub const CENTRED_ON_PARENT: f32 = 0.1;
 /// docs). The mount normal is the direction a drawer slides, a door opens towards, a knob turns
 /// about. A vertical mount normal for a side-opening template (drawer, door hinge, sliding panel;
 /// found resting on a shelf rather than hung in the front) is not trusted; then, and without a
-/// contact, [`outward_direction`] decides from the geometry.
-#[must_use]
-pub fn estimate_joint(
-    parent_id: PartId,
-    parent: &Primitive,
-    child_id: PartId,
-    child: &Primitive,
-    spec: &JointSpec,
-    cfg: &KinematicsConfig,
-) -> Joint {
-    fit_joint(parent_id, parent, child_id, child, spec, cfg).0
-}
-
-/// [`estimate_joint`], with how a hinge's edge was chosen (`None` for other templates).
+/// contact, [`outward_direction`] decides from the geometry. How a hinge's edge was chosen is
+/// returned beside the joint (`None` for other templates).
 #[must_use]
 pub fn fit_joint(
     parent_id: PartId,
@@ -337,7 +325,7 @@ const CENTRED_HANDLE: f32 = 0.35;
 /// - a handle off centre on a thin panel (thickness at most half its smaller side) → a door:
 ///   revolute, hinged on the edge away from the handle (the handle sits where the lever is).
 ///
-/// Returns the kind and the outward front normal (the mount normal for [`estimate_joint`]);
+/// Returns the kind and the outward front normal (the mount normal for [`fit_joint`]);
 /// `None` keeps the part rigid (no front found, not at the parent's front, a lid-like top face,
 /// a thick block with an off-centre handle).
 #[must_use]
@@ -526,13 +514,13 @@ mod tests {
         let frame = Primitive::cuboid_at(Vec3::new(-0.002, -0.0135, 0.2405), Vec3::new(0.376, 0.121, 0.481));
         let sash = Primitive::cuboid_at(Vec3::new(-0.004, 0.0085, 0.151), Vec3::new(0.29, 0.017, 0.2));
         let cfg = KinematicsConfig::default();
-        let j = estimate_joint(1, &frame, 2, &sash, &spec(JointKind::Prismatic, Template::SlidingPanel, None, None), &cfg);
+        let j = fit_joint(1, &frame, 2, &sash, &spec(JointKind::Prismatic, Template::SlidingPanel, None, None), &cfg).0;
         assert!(j.axis_world.dot(Vec3::Z) > 0.99, "{}", j.axis_world);
         assert!(j.upper > 0.15, "{}", j.upper);
         // CALVIN's desk: a sliding cover standing on the desk's top runs along the top.
         let desk = Primitive::cuboid_at(Vec3::new(0.001, 0.04, 0.402), Vec3::new(1.058, 0.413, 0.804));
         let cover = Primitive::cuboid_at(Vec3::new(0.05, 0.084, 0.69), Vec3::new(0.355, 0.074, 0.278));
-        let j = estimate_joint(1, &desk, 2, &cover, &spec(JointKind::Prismatic, Template::SlidingPanel, None, None), &cfg);
+        let j = fit_joint(1, &desk, 2, &cover, &spec(JointKind::Prismatic, Template::SlidingPanel, None, None), &cfg).0;
         assert!(j.axis_world.dot(Vec3::X).abs() > 0.99, "{}", j.axis_world);
     }
 
@@ -543,10 +531,10 @@ mod tests {
         let plate = Primitive::cuboid_at(Vec3::new(-0.4, -0.035, 2.27), Vec3::new(0.078, 0.012, 0.054));
         let dial = Primitive::cuboid_at(Vec3::new(-0.125, -0.065, 2.22), Vec3::new(0.09, 0.023, 0.08));
         let cfg = KinematicsConfig::default();
-        let j = estimate_joint(1, &plate, 2, &dial, &spec(JointKind::Revolute, Template::Knob, None, None), &cfg);
+        let j = fit_joint(1, &plate, 2, &dial, &spec(JointKind::Revolute, Template::Knob, None, None), &cfg).0;
         assert!(j.axis_world.dot(Vec3::NEG_Y) > 0.99, "{}", j.axis_world);
         // Mounted on a face it touches, that face decides.
-        let j = estimate_joint(1, &plate, 2, &dial, &spec(JointKind::Revolute, Template::Knob, None, Some(Vec3::X)), &cfg);
+        let j = fit_joint(1, &plate, 2, &dial, &spec(JointKind::Revolute, Template::Knob, None, Some(Vec3::X)), &cfg).0;
         assert!(j.axis_world.dot(Vec3::X) > 0.99, "{}", j.axis_world);
     }
 
@@ -558,7 +546,7 @@ mod tests {
         let bar = Primitive::cuboid_at(Vec3::new(0.06, 0.01, 0.27), Vec3::new(0.04, 0.2, 0.025));
         let cfg = KinematicsConfig::default();
         let lever = |grip: Option<Vec3>| {
-            estimate_joint(1, &base, 2, &bar, &spec(JointKind::Revolute, Template::Lever, grip, Some(Vec3::X)), &cfg).origin_world
+            fit_joint(1, &base, 2, &bar, &spec(JointKind::Revolute, Template::Lever, grip, Some(Vec3::X)), &cfg).0.origin_world
         };
         assert!((lever(Some(Vec3::new(0.07, -0.13, 0.25))) - Vec3::new(0.06, 0.11, 0.27)).length() < 1e-5);
         // A grip at the end its mount supports: the grip decides.
@@ -567,11 +555,11 @@ mod tests {
         // A square latch plate turns about its centre, and so does a bar through a door (ADROIT's
         // latch: a handle on each face).
         let plate = Primitive::cuboid_at(Vec3::new(0.06, 0.01, 0.27), Vec3::new(0.02, 0.06, 0.05));
-        let j = estimate_joint(1, &base, 2, &plate, &spec(JointKind::Revolute, Template::Lever, None, Some(Vec3::X)), &cfg);
+        let j = fit_joint(1, &base, 2, &plate, &spec(JointKind::Revolute, Template::Lever, None, Some(Vec3::X)), &cfg).0;
         assert!((j.origin_world - plate.center()).length() < 1e-6);
         let door = Primitive::cuboid_at(Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.1, 0.5, 1.0));
         let through = Primitive::cuboid_at(Vec3::new(0.0, 0.1, 1.0), Vec3::new(0.28, 0.44, 0.07));
-        let j = estimate_joint(1, &door, 2, &through, &spec(JointKind::Revolute, Template::Lever, None, Some(Vec3::X)), &cfg);
+        let j = fit_joint(1, &door, 2, &through, &spec(JointKind::Revolute, Template::Lever, None, Some(Vec3::X)), &cfg).0;
         assert!((j.origin_world - through.center()).length() < 1e-6);
     }
 
@@ -585,11 +573,11 @@ mod tests {
             Vec3::new(0.08, 0.08, 0.03),
             crate::math::Pose::from_parts(Vec3::new(-0.35, -0.12, 0.58), crate::math::Quat::IDENTITY),
         );
-        let j = estimate_joint(1, &desk, 2, &cap, &spec(JointKind::Prismatic, Template::Button, None, None), &KinematicsConfig::default());
+        let j = fit_joint(1, &desk, 2, &cap, &spec(JointKind::Prismatic, Template::Button, None, None), &KinematicsConfig::default()).0;
         assert!(j.axis_world.dot(Vec3::NEG_Z) > 0.999, "{}", j.axis_world);
         // A square key is pressed into the face it sits on.
         let key = Primitive::cuboid_at(Vec3::new(-0.35, -0.175, 0.58), Vec3::new(0.03, 0.02, 0.03));
-        let j = estimate_joint(1, &desk, 2, &key, &spec(JointKind::Prismatic, Template::Button, None, None), &KinematicsConfig::default());
+        let j = fit_joint(1, &desk, 2, &key, &spec(JointKind::Prismatic, Template::Button, None, None), &KinematicsConfig::default()).0;
         assert!(j.axis_world.dot(Vec3::Y) > 0.999, "{}", j.axis_world);
     }
 
@@ -604,14 +592,15 @@ mod tests {
         check_handle(&body, &front, handle, Some((JointKind::Prismatic, Vec3::NEG_Y)));
         check_handle(&body, &deep, handle, Some((JointKind::Prismatic, Vec3::NEG_Y)));
         // Through the pipeline's estimate: slides out of the front by most of the body's depth.
-        let j = estimate_joint(
+        let j = fit_joint(
             1,
             &body,
             2,
             &front,
             &spec(JointKind::Prismatic, Template::Drawer, Some(handle), Some(Vec3::NEG_Y)),
             &KinematicsConfig::default(),
-        );
+        )
+        .0;
         assert!(j.axis_world.dot(Vec3::NEG_Y) > 0.999 && (j.upper - 0.85 * 0.5).abs() < 1e-5, "{j:?}");
     }
 
@@ -641,14 +630,15 @@ mod tests {
     #[test]
     fn drawer_slides_out_of_the_front_about_its_depth() {
         let drawer = Primitive::cuboid_at(Vec3::new(0.0, 0.26, 0.8), Vec3::new(0.6, 0.02, 0.2));
-        let j = estimate_joint(
+        let j = fit_joint(
             1,
             &cabinet_body(),
             2,
             &drawer,
             &spec(JointKind::Prismatic, Template::Drawer, None, None),
             &KinematicsConfig::default(),
-        );
+        )
+        .0;
         assert!(j.axis_world.dot(Vec3::Y) > 0.999, "{j:?}");
         assert!((j.upper - 0.85 * 0.5).abs() < 1e-5);
     }
@@ -657,14 +647,15 @@ mod tests {
     fn door_hinges_on_the_edge_away_from_its_handle_and_opens_outward() {
         let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
         let handle = Vec3::new(0.36, 0.29, 0.5); // near the door's +x edge
-        let j = estimate_joint(
+        let j = fit_joint(
             1,
             &cabinet_body(),
             2,
             &door,
             &spec(JointKind::Revolute, Template::Hinge, Some(handle), None),
             &KinematicsConfig::default(),
-        );
+        )
+        .0;
         assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "vertical hinge: {j:?}");
         assert!((j.origin_world.x - 0.0).abs() < 1e-5, "hinge on the -x edge: {j:?}");
         assert!((j.origin_world.y - 0.25).abs() < 1e-5, "at the back face: {j:?}");
@@ -727,28 +718,23 @@ mod tests {
         let frame = Primitive::cuboid_at(Vec3::new(0.2, 0.0, 1.0), Vec3::new(1.0, 0.1, 2.0));
         let door = Primitive::cuboid_at(Vec3::new(0.2, 0.0, 1.0), Vec3::new(0.8, 0.04, 1.9));
         let handle = Vec3::new(0.5, 0.04, 1.0);
-        let j = estimate_joint(
-            1,
-            &frame,
-            2,
-            &door,
-            &spec(JointKind::Revolute, Template::Hinge, Some(handle), None),
-            &KinematicsConfig::default(),
-        );
+        let j =
+            fit_joint(1, &frame, 2, &door, &spec(JointKind::Revolute, Template::Hinge, Some(handle), None), &KinematicsConfig::default()).0;
         assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "{j:?}");
         assert!((j.origin_world.x - (-0.2 - 0.04)).abs() < 1e-5, "a door's thickness past the -x edge: {j:?}");
         assert!(j.origin_world.y.abs() < 1e-5, "at mid-thickness: {j:?}");
         // The same door laid over the frame's front face hinges on its back edge.
         let overlay = Primitive::cuboid_at(Vec3::new(0.2, 0.07, 1.0), Vec3::new(0.8, 0.04, 1.9));
         let handle = Vec3::new(0.5, 0.11, 1.0);
-        let j = estimate_joint(
+        let j = fit_joint(
             1,
             &frame,
             2,
             &overlay,
             &spec(JointKind::Revolute, Template::Hinge, Some(handle), None),
             &KinematicsConfig::default(),
-        );
+        )
+        .0;
         assert!((j.origin_world.x + 0.2).abs() < 1e-5 && (j.origin_world.y - 0.05).abs() < 1e-5, "{j:?}");
     }
 
@@ -756,14 +742,15 @@ mod tests {
     fn oven_door_with_handle_on_top_hinges_at_the_bottom() {
         let door = Primitive::cuboid_at(Vec3::new(0.0, 0.26, 0.4), Vec3::new(0.7, 0.02, 0.5));
         let handle = Vec3::new(0.0, 0.29, 0.6);
-        let j = estimate_joint(
+        let j = fit_joint(
             1,
             &cabinet_body(),
             2,
             &door,
             &spec(JointKind::Revolute, Template::Hinge, Some(handle), None),
             &KinematicsConfig::default(),
-        );
+        )
+        .0;
         assert!(j.axis_world.dot(Vec3::X).abs() > 0.999, "{j:?}");
         assert!((j.origin_world.z - 0.15).abs() < 1e-5, "{j:?}");
     }
@@ -776,20 +763,21 @@ mod tests {
         let body = cabinet_body();
         let knob = Primitive::cuboid_at(Vec3::new(0.42, 0.2575, 0.9), Vec3::new(0.04, 0.015, 0.04));
         let cfg = KinematicsConfig::default();
-        let guessed = estimate_joint(1, &body, 2, &knob, &spec(JointKind::Revolute, Template::Knob, None, None), &cfg);
-        let mounted = estimate_joint(1, &body, 2, &knob, &spec(JointKind::Revolute, Template::Knob, None, Some(Vec3::Y)), &cfg);
+        let guessed = fit_joint(1, &body, 2, &knob, &spec(JointKind::Revolute, Template::Knob, None, None), &cfg).0;
+        let mounted = fit_joint(1, &body, 2, &knob, &spec(JointKind::Revolute, Template::Knob, None, Some(Vec3::Y)), &cfg).0;
         assert!(guessed.axis_world.dot(Vec3::Y) > 0.99, "the dial's own axis, not the side: {guessed:?}");
         assert!(mounted.axis_world.dot(Vec3::Y) > 0.999, "{mounted:?}");
         // A vertical mount normal does not turn a door into a lid.
         let door = Primitive::cuboid_at(Vec3::new(0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
-        let j = estimate_joint(
+        let j = fit_joint(
             1,
             &body,
             2,
             &door,
             &spec(JointKind::Revolute, Template::Hinge, Some(Vec3::new(0.36, 0.29, 0.5)), Some(Vec3::Z)),
             &cfg,
-        );
+        )
+        .0;
         assert!(j.axis_world.dot(Vec3::Z).abs() > 0.999, "{j:?}");
     }
 
@@ -797,14 +785,15 @@ mod tests {
     fn a_sliding_panel_slides_in_its_plane_towards_the_open_side() {
         let body = cabinet_body(); // front face at y = 0.25, x in [-0.4, 0.4]
         let panel = Primitive::cuboid_at(Vec3::new(-0.2, 0.26, 0.5), Vec3::new(0.4, 0.02, 0.9));
-        let j = estimate_joint(
+        let j = fit_joint(
             1,
             &body,
             2,
             &panel,
             &spec(JointKind::Prismatic, Template::SlidingPanel, None, Some(Vec3::Y)),
             &KinematicsConfig::default(),
-        );
+        )
+        .0;
         assert!(j.axis_world.dot(Vec3::X) > 0.999, "{j:?}");
         assert!((j.upper - 0.4).abs() < 1e-4, "{j:?}");
     }

@@ -57,7 +57,7 @@ pub enum GeometryTest {
     ToggleLever,
 }
 
-/// How a joint type is fitted to the geometry of a part ([`super::assign::estimate_joint`]).
+/// How a joint type is fitted to the geometry of a part ([`super::assign::fit_joint`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Template {
