@@ -436,8 +436,9 @@ pub fn inspector_ui(ui: &mut egui::Ui, state: &AppState, panels: &mut PanelState
         let o = joint.origin_world;
         ui.horizontal(|ui| {
             ui.label(format!("Pivot ({:.3}, {:.3}, {:.3}) m", o.x, o.y, o.z));
-            let hinged = super::review::evidence_of(model, id).is_some_and(super::review::is_hinged);
-            if hinged && ui.button("Other edge").on_hover_text("Move the hinge to the part's other edge (E)").clicked() {
+            if doc.hinge_edge_of(id).is_some()
+                && ui.button("Other edge").on_hover_text("Move the hinge to the part's other edge (E)").clicked()
+            {
                 commands.push(AppCommand::Edit(EditCommand::OtherHingeEdge { child: id }));
             }
         });

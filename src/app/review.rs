@@ -11,7 +11,7 @@ use eframe::egui::{self, Color32, RichText};
 use super::panels::part_name;
 use super::state::{AppCommand, AppState};
 use crate::edit::EditCommand;
-use crate::kinematics::{JointEvidence, Template};
+use crate::kinematics::JointEvidence;
 use crate::model::SceneModel;
 use crate::pipeline::PinnedEdits;
 use crate::scan::PartId;
@@ -58,11 +58,6 @@ pub fn next_in_queue(queue: &[ReviewItem], current: Option<PartId>) -> Option<Pa
     }
 }
 
-/// Whether the joint is a door's or lid's hinge (it has another edge to move to).
-pub(super) fn is_hinged(e: &JointEvidence) -> bool {
-    matches!(e.template, Template::Hinge | Template::LidHinge)
-}
-
 /// The evidence recorded for the joint above `child`.
 #[must_use]
 pub fn evidence_of(model: &SceneModel, child: PartId) -> Option<&JointEvidence> {
@@ -94,7 +89,7 @@ pub fn review_ui(ui: &mut egui::Ui, state: &AppState, commands: &mut Vec<AppComm
         if ui.add_enabled(selected_queued, egui::Button::new("Confirm joint (A)")).clicked() {
             commands.push(AppCommand::ConfirmSelected);
         }
-        let hinged = state.selected.and_then(|s| evidence_of(model, s)).is_some_and(is_hinged);
+        let hinged = state.selected.is_some_and(|s| doc.hinge_edge_of(s).is_some());
         if ui.add_enabled(hinged, egui::Button::new("Other hinge edge (E)")).clicked() {
             commands.push(AppCommand::OtherEdgeSelected);
         }
@@ -161,7 +156,7 @@ pub(super) fn apply(state: &mut AppState, command: &AppCommand) {
             state.apply(AppCommand::Select(next));
         }
         AppCommand::OtherEdgeSelected => {
-            let Some(child) = state.selected.filter(|s| evidence_of(doc.model(), *s).is_some_and(is_hinged)) else { return };
+            let Some(child) = state.selected.filter(|s| doc.hinge_edge_of(*s).is_some()) else { return };
             state.apply(AppCommand::Edit(EditCommand::OtherHingeEdge { child }));
         }
         _ => {}

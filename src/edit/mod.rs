@@ -15,7 +15,7 @@ pub use command::{EditCommand, is_pinned, unpin};
 pub use session::{SESSION_FORMAT, SceneSource, Session};
 
 use crate::export::{ExportError, SceneFiles, UrdfConfig, write_scene_files};
-use crate::kinematics::{JointKind, Template};
+use crate::kinematics::JointKind;
 use crate::math::Vec3;
 use crate::model::{PartModel, SceneModel};
 use crate::pipeline::{FittedParts, FloorHint, PinnedEdits, PipelineConfig, Progress, assemble, fit_one_part, fit_parts};
@@ -342,10 +342,12 @@ impl Document {
     }
 
     /// Where the hinge of the door or lid `child` stands now: a world direction from the part's
-    /// centre towards its edge, or `None` when its joint is not a movable door or lid hinge.
-    fn hinge_edge_of(&self, child: PartId) -> Option<Vec3> {
+    /// centre towards its edge, or `None` when its joint is not a movable door or lid hinge (then
+    /// [`EditCommand::OtherHingeEdge`] is refused).
+    #[must_use]
+    pub fn hinge_edge_of(&self, child: PartId) -> Option<Vec3> {
         let joint = self.model.joint_of(child).filter(|j| j.kind.is_movable())?;
-        let hinged = self.model.evidence.iter().any(|e| e.child == child && matches!(e.template, Template::Hinge | Template::LidHinge));
+        let hinged = self.model.evidence.iter().any(|e| e.child == child && e.template.is_hinge());
         let centre = self.model.part(child)?.primitive.center();
         let r = joint.origin_world - centre;
         let across = r - joint.axis_world * r.dot(joint.axis_world);

@@ -31,7 +31,7 @@ fn door_with_handle(doc: &Document) -> (PartId, PartId, PartId) {
 
 /// A door or lid of the demo hinged by the `hinge` or `lid_hinge` template.
 fn hinged_door(doc: &Document) -> PartId {
-    doc.model().evidence.iter().find(|e| matches!(e.template, Template::Hinge | Template::LidHinge)).unwrap().child
+    doc.model().evidence.iter().find(|e| e.template.is_hinge()).unwrap().child
 }
 
 /// Applies `cmd` to the demo and checks the outcome: `Ok(check)` runs `check` on the edited

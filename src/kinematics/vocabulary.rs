@@ -103,6 +103,13 @@ impl Template {
             JointKind::Continuous => Template::Spin,
         }
     }
+
+    /// A door's or lid's hinge: turns about one of the part's edges, which a person may move to
+    /// the opposite edge.
+    #[must_use]
+    pub fn is_hinge(self) -> bool {
+        matches!(self, Template::Hinge | Template::LidHinge)
+    }
 }
 
 /// One class of parts.
