@@ -719,3 +719,65 @@ fn a_heavier_knob_is_named_armature_with_the_heavier_part_as_the_other_reading()
     let note = "mass_scale: explains the recording as well as the reported armature";
     assert!(rejected.iter().any(|r| r.starts_with(note)), "{rejected:?}");
 }
+
+/// A slider on a horizontal rail (gravity does no work on it).
+const SLIDER: &str = r#"<robot name="rail"><link name="base"/>
+  <link name="carriage"><inertial><mass value="2"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="slide" type="prismatic"><parent link="base"/><child link="carriage"/><axis xyz="1 0 0"/>
+    <limit lower="0" upper="0.5" effort="100" velocity="1"/></joint>
+</robot>"#;
+
+/// [`SLIDER`] driven forward for 8 s and back for 8 s (its speed wavers at 1.5 Hz but never
+/// changes sign within a half), with the effort its 2 kg needs plus dry friction of
+/// `friction` N (smooth over 5 mm/s) and a constant `offset` N added to the recorded effort.
+fn slider_csv(friction: f64, offset: f64) -> String {
+    let w = std::f64::consts::TAU * 1.5;
+    let travel = |t: f64| 0.05 * t + 0.03 / w * (1.0 - (w * t).cos());
+    let mut csv = String::from("time,slide.q,slide.effort\n");
+    for i in 0..=3200 {
+        let t = f64::from(i) / 200.0;
+        let (x, v, a) = if t < 8.0 {
+            (0.05 + travel(t), 0.05 + 0.03 * (w * t).sin(), 0.03 * w * (w * t).cos())
+        } else {
+            let s = t - 8.0;
+            (0.05 + travel(8.0) - travel(s), -(0.05 + 0.03 * (w * s).sin()), -0.03 * w * (w * s).cos())
+        };
+        let effort = 2.0 * a + friction * (v / 0.005).tanh() + offset;
+        writeln!(csv, "{t:.4},{x:.9},{effort:.9}").expect("writes to a string");
+    }
+    csv
+}
+
+/// Broke: dry friction of 0.45 N and a 0.3 N bias of the recorded effort on a slider that moves
+/// forward for half the recording and back for the other half. Neither a symmetric friction law
+/// nor an offset lowers the held-out error in more than half of the held-out blocks, and the law
+/// that explains both (friction that differs by direction: 0.75 N forward, 0.15 N back) could
+/// only enter in place of a symmetric one: 84 % of the effort was reported `unknown`, and the
+/// rejection said the friction was "better in only 100 % of the held-out blocks".
+#[test]
+fn friction_with_an_offset_on_a_slider_that_moves_one_way_at_a_time_is_found() {
+    let model = parse_model(SLIDER, Path::new("rail.urdf")).expect("model parses");
+    let rec = parse_recording(&slider_csv(0.45, 0.3), Path::new("rail.csv")).expect("parses");
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    let kinds: Vec<&str> = report.effects.iter().map(|e| e.kind.as_str()).collect();
+    assert_eq!(kinds, ["coulomb_friction"], "{:?}", report.effects);
+    let p = &report.effects[0].params;
+    assert!((p["friction"] - 0.75).abs() < 0.02 && (p["friction_reverse"] - 0.15).abs() < 0.02, "{p:?}");
+}
+
+/// Broke: on the real double pendulum's main run, effort space read the elbow's friction as
+/// viscous damping (its efforts fit a little better than with dry friction), and the fitted
+/// model replayed the held-out part about twice as badly as with dry friction in its place
+/// (elbow 0.019 against 0.010 rad). Both laws are now replayed; the elbow's friction is dry,
+/// and the held-out replay of each joint is within 0.016 rad.
+#[test]
+fn a_real_double_pendulums_elbow_friction_is_read_by_the_motion_it_predicts() {
+    let Some((model, rec)) = shared_recording("dfki_double_pendulum", "recording.csv") else { return };
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    let elbow: Vec<&str> = report.effects.iter().filter(|e| e.joint == "elbow").map(|e| e.kind.as_str()).collect();
+    assert!(elbow.contains(&"coulomb_friction") && !elbow.contains(&"viscous_damping"), "{elbow:?}");
+    for joint in ["shoulder", "elbow"] {
+        let held = &report.held_out.per_joint[joint];
+        assert!(held.rmse_after < 0.016, "{joint}: held-out replay {} rad", held.rmse_after);
+    }
+}

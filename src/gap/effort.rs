@@ -46,6 +46,11 @@ pub struct SelectionRules {
     /// share of the joint's RMS gravity effort cannot be told from that error, and is not
     /// reported; residual effort within it is the model's accuracy, not `unknown`.
     pub min_static_load_share: f64,
+    /// Least cut of a chain's held-out replay error (the mean over its joints of each one's
+    /// squared error relative to the model as written) for which the other reading of a joint's
+    /// friction (dry friction for viscous damping, or the reverse) replaces the one effort space
+    /// chose: a clear improvement of the predicted motion, not a tie broken by noise.
+    pub min_replay_gain: f64,
     /// Smallest change of a part's weight worth reporting (documented masses are rarely better
     /// than this): a 4 % heavier part is the model's accuracy, not missing physics.
     pub min_mass_change: f64,
@@ -85,6 +90,7 @@ impl Default for SelectionRules {
             mass_scale_range: (0.5, 3.0),
             min_mass_change: 0.1,
             max_breakaway_ratio: 3.0,
+            min_replay_gain: 0.25,
         }
     }
 }
@@ -409,6 +415,10 @@ impl JointFinding {
         Self { cv_rms_after: self.cv_rms_after * after / before, residual_after, ..self.clone() }
     }
 }
+
+/// A set of candidate terms of an [`EffortProblem`] (opaque: only the problem reads it).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Terms(Vec<usize>);
 
 /// The whole effort-space problem.
 pub struct EffortProblem<'a> {
@@ -1080,7 +1090,8 @@ impl EffortProblem<'_> {
     /// A refinement whose departure from its base law lies within two jackknife σ of none is
     /// its base law (the rule position space applies to every level): an engine's regularised
     /// friction on a loaded shoulder gave a "break-away" 1.8× the sliding level, 1.7σ from none.
-    /// It is replaced by the base-law variant on its joint that fits best.
+    /// It is replaced by the base-law variant on its joint that fits best, if that passes on its
+    /// own, and dropped otherwise.
     fn settle_refinements(&self, chosen: &mut Vec<usize>) {
         let folds = self.rules.folds.max(2);
         loop {
@@ -1106,10 +1117,14 @@ impl EffortProblem<'_> {
                 })
                 .map(|b| (sse_with(b), b))
                 .min_by(|x, y| x.0.total_cmp(&y.0));
-            *chosen = match base {
-                Some((_, b)) => self.with(&rest, b),
-                None => rest,
-            };
+            // The base law must pass on its own: a refinement that entered whole (no base
+            // variant passed alone) and proves to be its base law was never worth reporting.
+            let rest_fit = self.evaluate(&rest);
+            let base = base.map(|(_, b)| self.with(&rest, b)).filter(|with| {
+                let b = with[with.len() - 1];
+                self.passes(&self.verdict(&rest_fit, &self.evaluate(with), &self.rows_of(b), b, None))
+            });
+            *chosen = base.unwrap_or(rest);
         }
     }
 
@@ -1154,24 +1169,41 @@ impl EffortProblem<'_> {
     /// while one does.
     fn forward(&self, chosen: &mut Vec<usize>, current: &mut Evaluation, banned: &[bool]) {
         for _ in 0..4 * self.rows.len() + 8 {
-            let mut best: Option<(usize, Verdict, Evaluation)> = None;
-            for (c, &ban) in banned.iter().enumerate() {
-                // A refinement enters only in place of its base law, so that what it adds is
-                // judged on its own.
-                if ban || chosen.contains(&c) || (self.candidates[c].is_refinement() && self.family_member(chosen, c).is_none()) {
-                    continue;
-                }
-                let e = self.evaluate(&self.with(chosen, c));
-                let v = self.verdict(current, &e, &self.rows_of(c), c, self.family_member(chosen, c));
-                // Ties (look-alike kinds) go to the earlier candidate.
-                if self.passes(&v) && best.as_ref().is_none_or(|(_, bv, _)| v.gain > bv.gain * 1.001 + 1e-12) {
-                    best = Some((c, v, e));
-                }
-            }
-            let Some((c, _, e)) = best else { return };
+            // A refinement enters in place of its base law, so that what it adds is judged on
+            // its own; only where no term passes alone may one enter whole. Friction that
+            // differs by direction on a joint that moves one way for long spells is two
+            // levels that neither a symmetric law nor an offset matches alone: each is better
+            // in only half of the held-out blocks.
+            let step = self.best_step(chosen, current, banned, false).or_else(|| self.best_step(chosen, current, banned, true));
+            let Some((c, e)) = step else { return };
             *chosen = self.with(chosen, c);
             *current = e;
         }
+    }
+
+    /// The candidate not `banned` that passes and cuts the held-out error most against
+    /// `current`: among those that may enter ([`Self::may_enter`]), or, with `whole_refinements`,
+    /// among the refinements that may not (their family absent from the joint).
+    fn best_step(&self, chosen: &[usize], current: &Evaluation, banned: &[bool], whole_refinements: bool) -> Option<(usize, Evaluation)> {
+        let mut best: Option<(usize, Verdict, Evaluation)> = None;
+        for (c, &ban) in banned.iter().enumerate() {
+            if ban || chosen.contains(&c) || self.may_enter(chosen, c) == whole_refinements {
+                continue;
+            }
+            let e = self.evaluate(&self.with(chosen, c));
+            let v = self.verdict(current, &e, &self.rows_of(c), c, self.family_member(chosen, c));
+            // Ties (look-alike kinds) go to the earlier candidate.
+            if self.passes(&v) && best.as_ref().is_none_or(|(_, bv, _)| v.gain > bv.gain * 1.001 + 1e-12) {
+                best = Some((c, v, e));
+            }
+        }
+        best.map(|(c, _, e)| (c, e))
+    }
+
+    /// Whether candidate c may join `chosen`: a refinement enters only in place of its base law,
+    /// so that what it adds is judged on its own.
+    fn may_enter(&self, chosen: &[usize], c: usize) -> bool {
+        !self.candidates[c].is_refinement() || self.family_member(chosen, c).is_some()
     }
 
     /// Drops chosen terms that no longer pass against the others; true when one was dropped.
@@ -1219,11 +1251,61 @@ impl EffortProblem<'_> {
         Effect { kind: cand.kind, params, blocks_upward: false }
     }
 
-    /// Identification: the chosen terms per joint, with jackknife σ, confidence, sizes, the
-    /// held-out error before and after, and what was considered and not reported.
+    /// Identification: the terms selection chooses ([`Self::chosen_terms`]) and their findings.
     #[must_use]
     pub fn identify(&self) -> Vec<JointFinding> {
-        let chosen = self.select();
+        self.findings(&self.chosen_terms())
+    }
+
+    /// The terms the selection rules choose.
+    #[must_use]
+    pub fn chosen_terms(&self) -> Terms {
+        Terms(self.select())
+    }
+
+    /// Whether `terms` read row r's friction as dry friction (true) or viscous damping (false);
+    /// None when it holds both or neither.
+    #[must_use]
+    pub fn friction_is_dry(&self, terms: &Terms, r: usize) -> Option<bool> {
+        let on_row = |family: Family| terms.0.iter().any(|&c| self.candidates[c].row == r && self.candidates[c].family == family);
+        match (on_row(Family::Friction), on_row(Family::Viscous)) {
+            (true, false) => Some(true),
+            (false, true) => Some(false),
+            _ => None,
+        }
+    }
+
+    /// `terms` with row r's friction read the other way, when it holds exactly one of dry
+    /// friction and viscous damping: the other law in its place (its variant with the least
+    /// held-out error, the other terms kept). None when the row holds both or neither, or the
+    /// other law's fit is not physical. On a fast joint a dry friction law smooth over a wide
+    /// transition and viscous damping fit the efforts nearly alike; what tells them apart is
+    /// how the motion they predict goes on ([`super::effort_mode`] replays both).
+    #[must_use]
+    pub fn other_friction_reading(&self, terms: &Terms, r: usize) -> Option<Terms> {
+        let (from, to) =
+            if self.friction_is_dry(terms, r)? { (Family::Friction, Family::Viscous) } else { (Family::Viscous, Family::Friction) };
+        let rest: Vec<usize> =
+            terms.0.iter().copied().filter(|&c| !(self.candidates[c].row == r && self.candidates[c].family == from)).collect();
+        (0..self.candidates.len())
+            .filter(|&c| self.candidates[c].row == r && self.candidates[c].family == to && self.may_enter(&rest, c))
+            .filter_map(|c| {
+                let set = self.with(&rest, c);
+                let e = self.evaluate(&set);
+                self.plausible(c, &e.theta).then(|| (e.row_sse(r), set))
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, mut set)| {
+                set.sort_unstable();
+                Terms(set)
+            })
+    }
+
+    /// The findings of `terms`: per joint, the terms with jackknife σ, confidence, sizes, the
+    /// held-out error before and after, and what was considered and not reported.
+    #[must_use]
+    pub fn findings(&self, terms: &Terms) -> Vec<JointFinding> {
+        let chosen = terms.0.clone();
         let k = self.rules.folds.max(2);
         let nominal = self.evaluate(&[]);
         let fitted = self.evaluate(&chosen);
@@ -1306,10 +1388,14 @@ impl EffortProblem<'_> {
         ))
     }
 
-    /// For every kind not chosen on a joint, its best variant added to the final model, and why
-    /// it was not reported.
+    /// For every kind not chosen on a joint, its best variant that could have joined the final
+    /// model, and why it was not reported. A refinement that would pass but could not enter (its
+    /// base law was not reported) is named beside its base law's reason: on a joint that never
+    /// rests, friction that differs by direction and a constant offset look alike, and neither
+    /// half alone need pass.
     fn explain_rejections(&self, chosen: &[usize], fitted: &Evaluation, findings: &mut [JointFinding]) {
         let mut best: BTreeMap<(usize, EffectKind), (Verdict, usize)> = BTreeMap::new();
+        let mut refinements: BTreeMap<usize, (Verdict, usize)> = BTreeMap::new();
         for c in 0..self.candidates.len() {
             let cand = &self.candidates[c];
             if chosen.iter().any(|&x| self.candidates[x].row == cand.row && self.candidates[x].kind == cand.kind) {
@@ -1317,35 +1403,66 @@ impl EffortProblem<'_> {
             }
             let e = self.evaluate(&self.with(chosen, c));
             let v = self.verdict(fitted, &e, &self.rows_of(c), c, self.family_member(chosen, c));
-            let entry = best.entry((cand.row, cand.kind)).or_insert((v, c));
-            if v.gain > entry.0.gain {
-                *entry = (v, c);
+            let into = if self.may_enter(chosen, c) {
+                best.entry((cand.row, cand.kind)).or_insert((v, c))
+            } else if self.passes(&v) {
+                refinements.entry(cand.row).or_insert((v, c))
+            } else {
+                continue;
+            };
+            if v.gain > into.0.gain {
+                *into = (v, c);
             }
         }
         for ((row, kind), (v, c)) in best {
-            let why = if let Some(why) = self.look_alike(chosen, fitted, c) {
-                why
-            } else if !v.plausible {
-                format!(
-                    "its fitted parameters are not physical or not material (a negative level; a part within 10 % of, or far from, its modelled weight; a break-away beyond {}× the sliding friction)",
-                    self.rules.max_breakaway_ratio
-                )
-            } else if v.effort_share < self.rules.min_effort_share {
-                format!("{:.1} % of the joint's own effort — too small to matter", 100.0 * v.effort_share)
-            } else if v.static_share < self.rules.min_static_load_share {
-                format!(
-                    "{:.1} % of the gravity effort the model needs at the joint — an error of the modelled weights and centres of \
-                     mass of that size acts the same way (a documented model is rarely better than {:.0} %)",
-                    100.0 * v.static_share,
-                    100.0 * self.rules.min_static_load_share
-                )
-            } else if v.gain < self.rules.min_cv_gain {
-                format!("held-out error {:+.1} % — not better on data it was not fitted to", -100.0 * v.gain)
-            } else {
-                format!("better in only {:.0} % of the held-out blocks", 100.0 * v.fold_share)
+            let refined = refinements
+                .get(&row)
+                .filter(|(_, r)| self.candidates[*r].family == self.candidates[c].family)
+                .map(|&(rv, r)| (rv, self.evaluate(&self.with(chosen, r)).theta, r));
+            let why = self.rejection_reason(chosen, fitted, v, c);
+            let why = match refined {
+                Some((rv, theta, r)) => format!(
+                    "{why}; {} would cut the held-out error by {:.0} %, but is a refinement of a law that was not reported",
+                    refinement_text(&self.effect_of(r, &theta)),
+                    100.0 * rv.gain
+                ),
+                None => why,
             };
             findings[row].rejected.push(format!("{}: {why}", kind.name()));
         }
+    }
+
+    /// Why candidate c, with verdict v against the final model, was not reported.
+    fn rejection_reason(&self, chosen: &[usize], fitted: &Evaluation, v: Verdict, c: usize) -> String {
+        if let Some(why) = self.look_alike(chosen, fitted, c) {
+            why
+        } else if !v.plausible {
+            format!(
+                "its fitted parameters are not physical or not material (a negative level; a part within 10 % of, or far from, its modelled weight; a break-away beyond {}× the sliding friction)",
+                self.rules.max_breakaway_ratio
+            )
+        } else if v.effort_share < self.rules.min_effort_share {
+            format!("{:.1} % of the joint's own effort — too small to matter", 100.0 * v.effort_share)
+        } else if v.static_share < self.rules.min_static_load_share {
+            format!(
+                "{:.1} % of the gravity effort the model needs at the joint — an error of the modelled weights and centres of \
+                 mass of that size acts the same way (a documented model is rarely better than {:.0} %)",
+                100.0 * v.static_share,
+                100.0 * self.rules.min_static_load_share
+            )
+        } else if v.gain < self.rules.min_cv_gain {
+            format!("held-out error {:+.1} % — not better on data it was not fitted to", -100.0 * v.gain)
+        } else {
+            format!("better in only {:.0} % of the held-out blocks", 100.0 * v.fold_share)
+        }
+    }
+}
+
+/// A refinement of a friction law in a few words.
+fn refinement_text(e: &Effect) -> String {
+    match e.kind {
+        EffectKind::StribeckFriction => format!("Stribeck friction ({:.4} sliding, {:.4} to break away)", e.params[0], e.params[1]),
+        _ => format!("friction that differs by direction ({:.4} forward, {:.4} backward)", e.params[0], e.params[2]),
     }
 }
 

@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use super::chain::{ChainInput, replay};
 use super::effects::{Effect, EffectKind, JointPhysics};
-use super::effort::{Bandwidth, EffortProblem, JointFinding, SelectionRules, Signals, signals};
+use super::effort::{Bandwidth, EffortProblem, JointFinding, SelectionRules, Signals, Terms, signals};
 use super::effort::{in_serial_chain, moving_part};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
@@ -159,16 +159,32 @@ fn effects_by_joint(findings: &[JointFinding]) -> BTreeMap<usize, Vec<Effect>> {
     findings.iter().map(|f| (f.joint, f.effects.clone())).collect()
 }
 
-/// What identification at one bandwidth found.
-struct Identified {
+/// The findings of `terms` in `problem`, with the unmodelled stops found per row.
+fn findings_with_stops(problem: &EffortProblem<'_>, terms: &Terms, stops: &[Vec<FoundStop>]) -> Vec<JointFinding> {
+    let mut findings = problem.findings(terms);
+    for (f, found) in findings.iter_mut().zip(stops) {
+        for stop in found {
+            add_stop(f, stop);
+        }
+    }
+    findings
+}
+
+/// What identification at one bandwidth found: on the whole recording and on its part before the
+/// held-out part (`train`), each problem with the terms it holds now.
+struct Identified<'a> {
     band: Bandwidth,
     sig: Signals,
     rows: Vec<usize>,
+    problem: EffortProblem<'a>,
+    terms: Terms,
+    train: Option<(EffortProblem<'a>, Terms)>,
+    stops: Vec<Vec<FoundStop>>,
     findings: Vec<JointFinding>,
     train_findings: Option<Vec<JointFinding>>,
 }
 
-impl Identified {
+impl Identified<'_> {
     /// The largest share of its joint's own effort that the fitted model leaves unexplained, over
     /// the joints whose verdict effort space gives (a joint alone on its body is judged again by
     /// its simulation, where stops and sticking are modelled).
@@ -185,8 +201,8 @@ impl Identified {
 /// dominant frequency: on the whole recording and on its part before `t_split`, unmodelled stops
 /// found and their contacts left out. None when no joint has enough free motion.
 #[allow(clippy::too_many_arguments)]
-fn identify_at(
-    model: &GapModel,
+fn identify_at<'a>(
+    model: &'a GapModel,
     rec: &Recording,
     positions: &[Vec<f64>],
     efforts: &[Option<Vec<f64>>],
@@ -195,7 +211,7 @@ fn identify_at(
     t_split: f64,
     rules: &SelectionRules,
     cutoff_over_motion: f64,
-) -> Option<Identified> {
+) -> Option<Identified<'a>> {
     let n = rec.time_s.len();
     let band = super::effort::bandwidth(&rec.time_s, positions, rules.smoothing_half_width_s, cutoff_over_motion);
     // The contact exclusions cover the whole support of the filters.
@@ -226,17 +242,90 @@ fn identify_at(
     } else {
         EffortProblem::new(model, &sig, gravity, &rows, &excluded, &everything, rules.clone()).unwrap_or(first)
     };
-    let mut findings = problem.identify();
-    let mut train_findings = EffortProblem::new(model, &sig, gravity, &rows, &excluded, &train, rules.clone()).map(|p| p.identify());
-    for (r, found) in stops.iter().enumerate() {
-        for stop in found {
-            add_stop(&mut findings[r], stop);
-            if let Some(t) = train_findings.as_mut() {
-                add_stop(&mut t[r], stop);
-            }
+    let terms = problem.chosen_terms();
+    let findings = findings_with_stops(&problem, &terms, &stops);
+    let train = EffortProblem::new(model, &sig, gravity, &rows, &excluded, &train, rules.clone()).map(|p| {
+        let t = p.chosen_terms();
+        (p, t)
+    });
+    let train_findings = train.as_ref().map(|(p, t)| findings_with_stops(p, t, &stops));
+    Some(Identified { band, sig, rows, problem, terms, train, stops, findings, train_findings })
+}
+
+/// Mean over `dofs` of the held-out squared error of `replayed` against the positions (samples
+/// from `t_split` on), each relative to that of `reference` (the model as written).
+fn held_out_score(
+    rec: &Recording,
+    positions: &[Vec<f64>],
+    replayed: &[Vec<f64>],
+    reference: &[Vec<f64>],
+    dofs: &[usize],
+    t_split: f64,
+) -> f64 {
+    let mse = |d: usize, r: &[Vec<f64>]| {
+        let (s, c) = (0..rec.time_s.len())
+            .filter(|&i| rec.time_s[i] >= t_split)
+            .map(|i| positions[d][i] - r[d][i])
+            .filter(|e| e.is_finite())
+            .fold((0.0, 0usize), |(s, c), e| (s + e * e, c + 1));
+        if c == 0 { f64::NAN } else { s / c as f64 }
+    };
+    let ratios: Vec<f64> = dofs.iter().map(|&d| mse(d, replayed) / mse(d, reference)).filter(|x| x.is_finite()).collect();
+    if ratios.is_empty() { f64::NAN } else { ratios.iter().sum::<f64>() / ratios.len() as f64 }
+}
+
+/// Effort space's reading of each chain joint's friction, checked against the motion it
+/// predicts: where a joint holds dry friction or viscous damping (one of the two), the other law
+/// in its place is fitted on the same data before the held-out part, and the whole chain is
+/// replayed through that part under both; the other reading replaces effort space's when its
+/// replay is better by [`SelectionRules::min_replay_gain`] (and the whole recording's problem
+/// reads the joint the same way). Equation error (effort space) is blind to how a small
+/// difference in the law adds up over a swing; output error sees it (Gautier's DIDIM validates
+/// an IDIM model the same way). A joint alone on its body is refined by its own simulation.
+#[allow(clippy::too_many_arguments)]
+fn settle_friction_by_replay(
+    model: &GapModel,
+    rec: &Recording,
+    positions: &[Vec<f64>],
+    tree: &MultiBody,
+    body_of_link: &[Option<usize>],
+    input: &ChainInput<'_>,
+    found: &mut Identified<'_>,
+    t_split: f64,
+    held_before: &[Vec<f64>],
+    rules: &SelectionRules,
+) {
+    let Some((train_problem, train_terms)) = found.train.as_mut() else { return };
+    let Some(train_findings) = found.train_findings.as_mut() else { return };
+    let dofs = model.dofs();
+    let chain: Vec<usize> = (0..found.rows.len()).filter(|&r| in_serial_chain(model, found.rows[r])).collect();
+    let chain_dofs: Vec<usize> = chain.iter().filter_map(|&r| dofs.iter().position(|&j| j == found.rows[r])).collect();
+    let horizon_s = found.band.held_out_horizon_s();
+    let score = |findings: &[JointFinding]| {
+        let (physics, fitted) = fitted_physics(model, tree, body_of_link, &effects_by_joint(findings));
+        let held = replay_pieces(&fitted, &physics, input, &found.sig, t_split, horizon_s);
+        held_out_score(rec, positions, &held, held_before, &chain_dofs, t_split)
+    };
+    let mut current = score(train_findings);
+    for &r in &chain {
+        let (Some(alt_train), Some(alt)) =
+            (train_problem.other_friction_reading(train_terms, r), found.problem.other_friction_reading(&found.terms, r))
+        else {
+            continue;
+        };
+        if found.problem.friction_is_dry(&alt, r) != train_problem.friction_is_dry(&alt_train, r) {
+            continue;
+        }
+        let alt_train_findings = findings_with_stops(train_problem, &alt_train, &found.stops);
+        let s = score(&alt_train_findings);
+        if s < (1.0 - rules.min_replay_gain) * current {
+            current = s;
+            *train_terms = alt_train;
+            *train_findings = alt_train_findings;
+            found.findings = findings_with_stops(&found.problem, &alt, &found.stops);
+            found.terms = alt;
         }
     }
-    Some(Identified { band, sig, rows, findings, train_findings })
 }
 
 /// Effort-space analysis of `rows` (model joint indices); one outcome per row.
@@ -275,23 +364,25 @@ pub(super) fn analyze_effort_space(
             break;
         }
     }
-    let Some(Identified { band, sig, rows, findings, train_findings }) = best else {
+    let Some(mut found) = best else {
         return Ok((Vec::new(), BTreeMap::new()));
     };
-    let rows = rows.as_slice();
 
     let (tree, body_of_link) = model.multibody()?;
     let recorded: Vec<Vec<f64>> = dofs.iter().map(|&j| (0..n).map(|i| rec.effort(&model.joints[j].name, i)).collect()).collect();
     let input = ChainInput { time_s: &rec.time_s, effort: &recorded, gravity };
     // The whole recording is replayed open loop from its start (the plots), the held-out part in
     // pieces from the measured state ([`Bandwidth::held_out_horizon_s`]).
-    let start = replay_start(&sig, rec.time_s.first().copied().unwrap_or(0.0));
-    let horizon_s = band.held_out_horizon_s();
+    let start = replay_start(&found.sig, rec.time_s.first().copied().unwrap_or(0.0));
+    let horizon_s = found.band.held_out_horizon_s();
     let (nominal_physics, _) = fitted_physics(model, &tree, &body_of_link, &BTreeMap::new());
+    let held_before = replay_pieces(&tree, &nominal_physics, &input, &found.sig, t_split, horizon_s);
+    settle_friction_by_replay(model, rec, &positions, &tree, &body_of_link, &input, &mut found, t_split, &held_before, &rules);
+    let Identified { band, sig, rows, findings, train_findings, .. } = found;
+    let rows = rows.as_slice();
     let before = replay_from(&tree, &nominal_physics, &input, &sig, start);
     let (physics, tree_fitted) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(&findings));
     let after = replay_from(&tree_fitted, &physics, &input, &sig, start);
-    let held_before = replay_pieces(&tree, &nominal_physics, &input, &sig, t_split, horizon_s);
     let held = train_findings.as_ref().map(|f| {
         let (p, t) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(f));
         replay_pieces(&t, &p, &input, &sig, t_split, horizon_s)
