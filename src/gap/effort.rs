@@ -1072,6 +1072,7 @@ impl EffortProblem<'_> {
             }
         }
         self.settle_refinements(&mut chosen);
+        self.prefer_offset_reading(&mut chosen, banned);
         self.prefer_inertia_alone(&mut chosen);
         chosen.sort_unstable();
         chosen
@@ -1087,11 +1088,25 @@ impl EffortProblem<'_> {
         }
     }
 
+    /// Whether refinement c is friction that differs by direction by `excess` (reverse level
+    /// less forward level) so little that the constant it adds while the joint moves, half of
+    /// it, lies within [`SelectionRules::min_static_load_share`] of the joint's gravity effort:
+    /// that constant is shaped like an error of the modelled weights, the rule an offset obeys.
+    fn asymmetry_within_weight_error(&self, c: usize, excess: f64) -> bool {
+        let cand = &self.candidates[c];
+        let gravity_rms = self.rows[cand.row].gravity_rms;
+        cand.kind == EffectKind::CoulombFriction
+            && cand.asymmetric
+            && gravity_rms > 0.0
+            && 0.5 * excess.abs() < self.rules.min_static_load_share * gravity_rms
+    }
+
     /// A refinement whose departure from its base law lies within two jackknife σ of none is
     /// its base law (the rule position space applies to every level): an engine's regularised
     /// friction on a loaded shoulder gave a "break-away" 1.8× the sliding level, 1.7σ from none.
-    /// It is replaced by the base-law variant on its joint that fits best, if that passes on its
-    /// own, and dropped otherwise.
+    /// So is friction that differs by direction by less than a weight error could
+    /// ([`Self::asymmetry_within_weight_error`]). It is replaced by the base-law variant on its
+    /// joint that fits best, if that passes on its own, and dropped otherwise.
     fn settle_refinements(&self, chosen: &mut Vec<usize>) {
         let folds = self.rules.folds.max(2);
         loop {
@@ -1101,7 +1116,8 @@ impl EffortProblem<'_> {
                     return false;
                 }
                 let jack: Vec<f64> = fitted.theta_without.iter().map(|t| self.refinement_excess(c, t)).collect();
-                self.refinement_excess(c, &fitted.theta).abs() < 2.0 * jackknife_sd(&jack, folds)
+                let excess = self.refinement_excess(c, &fitted.theta);
+                excess.abs() < 2.0 * jackknife_sd(&jack, folds) || self.asymmetry_within_weight_error(c, excess)
             });
             let Some(c) = doubtful else { return };
             let cand = &self.candidates[c];
@@ -1126,6 +1142,50 @@ impl EffortProblem<'_> {
             });
             *chosen = base.unwrap_or(rest);
         }
+    }
+
+    /// Friction that differs by direction and the same friction both ways beside a constant
+    /// offset are one law while the joint moves (levels f and r ≡ (f + r)/2 both ways, offset
+    /// (f − r)/2); only rests and reversals tell them apart. Where the offset reading explains
+    /// the recording as well ([`LOOK_ALIKE_SSE_SHARE`]), it is reported: it is the friction model
+    /// of robot identification (Coulomb, viscous, offset: Gautier; Swevers), and a torque
+    /// sensor's bias or a gravity compensation's error is the commoner cause. The other reading
+    /// is named among the rejected.
+    fn prefer_offset_reading(&self, chosen: &mut Vec<usize>, banned: &[bool]) {
+        let asymmetric: Vec<usize> = chosen
+            .iter()
+            .copied()
+            .filter(|&c| self.candidates[c].kind == EffectKind::CoulombFriction && self.candidates[c].asymmetric)
+            .collect();
+        for c in asymmetric {
+            if let Some(swapped) = self.offset_reading(chosen, c, banned) {
+                *chosen = swapped;
+            }
+        }
+    }
+
+    /// `chosen` with the friction by direction c read as the same friction both ways (its best
+    /// variant) and an offset, when that reading is physical and explains c's joint as well;
+    /// None otherwise, or when the joint's constant is taken (an offset or a spring chosen).
+    fn offset_reading(&self, chosen: &[usize], c: usize, banned: &[bool]) -> Option<Vec<usize>> {
+        let row = self.candidates[c].row;
+        let on_row = |x: usize, family: Family| self.candidates[x].row == row && self.candidates[x].family == family;
+        if chosen.iter().any(|&x| on_row(x, Family::Constant)) {
+            return None;
+        }
+        let offset = (0..self.candidates.len())
+            .find(|&x| on_row(x, Family::Constant) && self.candidates[x].kind == EffectKind::EffortOffset && !banned[x])?;
+        let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).chain([offset]).collect();
+        let mine = self.evaluate(chosen).row_sse(row);
+        let (sse, set) = (0..self.candidates.len())
+            .filter(|&x| on_row(x, Family::Friction) && !self.candidates[x].is_refinement() && !banned[x])
+            .filter_map(|x| {
+                let set = self.with(&rest, x);
+                let e = self.evaluate(&set);
+                (self.plausible(x, &e.theta)).then(|| (e.row_sse(row), set))
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))?;
+        (sse.is_finite() && sse <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE)).then_some(set)
     }
 
     /// The spec's rule: a heavier part (`mass_scale`) is inertia and weight together; inertia
@@ -1430,6 +1490,48 @@ impl EffortProblem<'_> {
             };
             findings[row].rejected.push(format!("{}: {why}", kind.name()));
         }
+        for (row, note) in self.direction_readings(chosen, fitted) {
+            findings[row].rejected.push(note);
+        }
+    }
+
+    /// Per joint reported with the same friction both ways and an offset: the friction that
+    /// differs by direction that explains it as well, as the other reading
+    /// ([`Self::prefer_offset_reading`]).
+    fn direction_readings(&self, chosen: &[usize], fitted: &Evaluation) -> Vec<(usize, String)> {
+        let mut out = Vec::new();
+        for &o in chosen.iter().filter(|&&o| self.candidates[o].kind == EffectKind::EffortOffset) {
+            let row = self.candidates[o].row;
+            let Some(&f) = chosen.iter().find(|&&f| self.candidates[f].row == row && self.candidates[f].family == Family::Friction) else {
+                continue;
+            };
+            let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != o && x != f).collect();
+            let mine = fitted.row_sse(row);
+            let best = (0..self.candidates.len())
+                .filter(|&x| {
+                    self.candidates[x].row == row && self.candidates[x].kind == EffectKind::CoulombFriction && self.candidates[x].asymmetric
+                })
+                .map(|x| {
+                    let e = self.evaluate(&self.with(&rest, x));
+                    (e.row_sse(row), x, e)
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((sse, x, e)) =
+                best.filter(|(sse, x, e)| *sse <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE) && self.plausible(*x, &e.theta))
+            {
+                out.push((
+                    row,
+                    format!(
+                        "coulomb_friction with friction_reverse: {} explains the recording as well as the reported coulomb_friction and \
+                         effort_offset (held-out error {:+.1} %): while the joint moves the two are one law, and the reading of robot \
+                         identification (the same friction both ways, an offset) is reported",
+                        refinement_text(&self.effect_of(x, &e.theta)),
+                        100.0 * (sse - mine) / mine.max(f64::MIN_POSITIVE)
+                    ),
+                ));
+            }
+        }
+        out
     }
 
     /// Why candidate c, with verdict v against the final model, was not reported.
