@@ -1071,7 +1071,7 @@ impl EffortProblem<'_> {
                 break;
             }
         }
-        self.settle_refinements(&mut chosen);
+        self.settle_refinements(&mut chosen, banned);
         self.prefer_offset_reading(&mut chosen, banned);
         self.prefer_inertia_alone(&mut chosen);
         chosen.sort_unstable();
@@ -1105,43 +1105,52 @@ impl EffortProblem<'_> {
     /// its base law (the rule position space applies to every level): an engine's regularised
     /// friction on a loaded shoulder gave a "break-away" 1.8× the sliding level, 1.7σ from none.
     /// So is friction that differs by direction by less than a weight error could
-    /// ([`Self::asymmetry_within_weight_error`]). It is replaced by the base-law variant on its
-    /// joint that fits best, if that passes on its own, and dropped otherwise.
-    fn settle_refinements(&self, chosen: &mut Vec<usize>) {
+    /// ([`Self::asymmetry_within_weight_error`]), and a refinement whose change over its best
+    /// base law is under [`SelectionRules::min_effort_share`] of the joint's effort. It is
+    /// replaced by the base-law variant on its joint that fits best, if that passes on its own,
+    /// and dropped otherwise.
+    fn settle_refinements(&self, chosen: &mut Vec<usize>, banned: &[bool]) {
         let folds = self.rules.folds.max(2);
         loop {
             let fitted = self.evaluate(chosen);
-            let doubtful = chosen.iter().copied().find(|&c| {
-                if !self.candidates[c].is_refinement() {
-                    return false;
-                }
+            let doubtful = chosen.iter().copied().filter(|&c| self.candidates[c].is_refinement()).find_map(|c| {
+                let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
+                let base = self.best_base(&rest, c, banned);
                 let jack: Vec<f64> = fitted.theta_without.iter().map(|t| self.refinement_excess(c, t)).collect();
                 let excess = self.refinement_excess(c, &fitted.theta);
-                excess.abs() < 2.0 * jackknife_sd(&jack, folds) || self.asymmetry_within_weight_error(c, excess)
+                // What the refinement changes over its best base law must matter too (it may
+                // have entered whole, judged by its full size).
+                let immaterial = base.as_ref().is_some_and(|(b, e)| {
+                    let change = self.change_rms(c, &fitted.theta, Some((*b, &e.theta)));
+                    change < self.rules.min_effort_share * self.rows[self.candidates[c].row].effort_rms
+                });
+                (excess.abs() < 2.0 * jackknife_sd(&jack, folds) || self.asymmetry_within_weight_error(c, excess) || immaterial)
+                    .then_some((rest, base))
             });
-            let Some(c) = doubtful else { return };
-            let cand = &self.candidates[c];
-            let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
-            let sse_with = |b: usize| {
-                let e = self.evaluate(&self.with(&rest, b));
-                self.rows_of(b).iter().map(|&r| e.row_sse(r)).sum::<f64>()
-            };
-            let base = (0..self.candidates.len())
-                .filter(|&b| {
-                    let x = &self.candidates[b];
-                    x.row == cand.row && x.family == cand.family && !x.is_refinement()
-                })
-                .map(|b| (sse_with(b), b))
-                .min_by(|x, y| x.0.total_cmp(&y.0));
-            // The base law must pass on its own: a refinement that entered whole (no base
-            // variant passed alone) and proves to be its base law was never worth reporting.
+            let Some((rest, base)) = doubtful else { return };
+            // The base law must pass on its own beside the rest, whichever way the refinement
+            // entered; a law that passes only with its refinement's extra level is not reported.
             let rest_fit = self.evaluate(&rest);
-            let base = base.map(|(_, b)| self.with(&rest, b)).filter(|with| {
-                let b = with[with.len() - 1];
-                self.passes(&self.verdict(&rest_fit, &self.evaluate(with), &self.rows_of(b), b, None))
-            });
-            *chosen = base.unwrap_or(rest);
+            let passing = base.filter(|(b, e)| self.passes(&self.verdict(&rest_fit, e, &self.rows_of(*b), *b, None)));
+            *chosen = passing.map_or(rest.clone(), |(b, _)| self.with(&rest, b));
         }
+    }
+
+    /// The base-law variant of refinement c's family on c's joint, not `banned`, that fits
+    /// best beside `rest`, with its evaluation.
+    fn best_base(&self, rest: &[usize], c: usize, banned: &[bool]) -> Option<(usize, Evaluation)> {
+        let cand = &self.candidates[c];
+        (0..self.candidates.len())
+            .filter(|&b| {
+                let x = &self.candidates[b];
+                x.row == cand.row && x.family == cand.family && !x.is_refinement() && !banned[b]
+            })
+            .map(|b| {
+                let e = self.evaluate(&self.with(rest, b));
+                (self.rows_of(b).iter().map(|&r| e.row_sse(r)).sum::<f64>(), b, e)
+            })
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|(_, b, e)| (b, e))
     }
 
     /// Friction that differs by direction and the same friction both ways beside a constant
@@ -1185,7 +1194,10 @@ impl EffortProblem<'_> {
                 (self.plausible(x, &e.theta)).then(|| (e.row_sse(row), set))
             })
             .min_by(|a, b| a.0.total_cmp(&b.0))?;
-        (sse.is_finite() && sse <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE)).then_some(set)
+        // The offset must matter as a term of its own.
+        let without_offset: Vec<usize> = set.iter().copied().filter(|&x| x != offset).collect();
+        let material = self.material(&self.verdict(&self.evaluate(&without_offset), &self.evaluate(&set), &[row], offset, None));
+        (material && sse.is_finite() && sse <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE)).then_some(set)
     }
 
     /// The spec's rule: a heavier part (`mass_scale`) is inertia and weight together; inertia
@@ -1311,48 +1323,47 @@ impl EffortProblem<'_> {
         Effect { kind: cand.kind, params, blocks_upward: false }
     }
 
-    /// Identification: the terms selection chooses ([`Self::chosen_terms`]) and their findings.
-    #[must_use]
-    pub fn identify(&self) -> Vec<JointFinding> {
-        self.findings(&self.chosen_terms())
-    }
-
     /// The terms the selection rules choose.
     #[must_use]
     pub fn chosen_terms(&self) -> Terms {
         Terms(self.select())
     }
 
-    /// Whether `terms` read row r's friction as dry friction (true) or viscous damping (false);
-    /// None when it holds both or neither.
+    /// The law `terms` read row r's friction by: a dry friction kind or viscous damping; None
+    /// when it holds both or neither.
     #[must_use]
-    pub fn friction_is_dry(&self, terms: &Terms, r: usize) -> Option<bool> {
-        let on_row = |family: Family| terms.0.iter().any(|&c| self.candidates[c].row == r && self.candidates[c].family == family);
-        match (on_row(Family::Friction), on_row(Family::Viscous)) {
-            (true, false) => Some(true),
-            (false, true) => Some(false),
+    pub fn friction_law(&self, terms: &Terms, r: usize) -> Option<EffectKind> {
+        let mut on_row =
+            terms.0.iter().map(|&c| &self.candidates[c]).filter(|c| c.row == r && matches!(c.family, Family::Friction | Family::Viscous));
+        match (on_row.next(), on_row.next()) {
+            (Some(c), None) => Some(c.kind),
             _ => None,
         }
     }
 
     /// `terms` with row r's friction read the other way, when it holds exactly one of dry
     /// friction and viscous damping: the other law in its place (its variant with the least
-    /// held-out error, the other terms kept). None when the row holds both or neither, or the
-    /// other law's fit is not physical. On a fast joint a dry friction law smooth over a wide
+    /// held-out error, the other terms kept). None when the row holds both or neither, or no
+    /// variant of the other law passes the selection rules beside the other terms. On a fast joint a dry friction law smooth over a wide
     /// transition and viscous damping fit the efforts nearly alike; what tells them apart is
     /// how the motion they predict goes on ([`super::effort_mode`] replays both).
     #[must_use]
     pub fn other_friction_reading(&self, terms: &Terms, r: usize) -> Option<Terms> {
-        let (from, to) =
-            if self.friction_is_dry(terms, r)? { (Family::Friction, Family::Viscous) } else { (Family::Viscous, Family::Friction) };
+        let (from, to) = if self.friction_law(terms, r)? == EffectKind::ViscousDamping {
+            (Family::Viscous, Family::Friction)
+        } else {
+            (Family::Friction, Family::Viscous)
+        };
         let rest: Vec<usize> =
             terms.0.iter().copied().filter(|&c| !(self.candidates[c].row == r && self.candidates[c].family == from)).collect();
+        let rest_fit = self.evaluate(&rest);
         (0..self.candidates.len())
             .filter(|&c| self.candidates[c].row == r && self.candidates[c].family == to && self.may_enter(&rest, c))
             .filter_map(|c| {
                 let set = self.with(&rest, c);
                 let e = self.evaluate(&set);
-                self.plausible(c, &e.theta).then(|| (e.row_sse(r), set))
+                // The other law must be a term the rules accept beside the rest.
+                self.passes(&self.verdict(&rest_fit, &e, &self.rows_of(c), c, None)).then(|| (e.row_sse(r), set))
             })
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(_, mut set)| {
@@ -1449,10 +1460,9 @@ impl EffortProblem<'_> {
     }
 
     /// For every kind not chosen on a joint, its best variant that could have joined the final
-    /// model, and why it was not reported. A refinement that would pass but could not enter (its
-    /// base law was not reported) is named beside its base law's reason: on a joint that never
-    /// rests, friction that differs by direction and a constant offset look alike, and neither
-    /// half alone need pass.
+    /// model, and why it was not reported. A refinement that would pass but was settled away
+    /// ([`Self::settle_refinements`]: its base law was not reported) is named beside its base
+    /// law's reason.
     fn explain_rejections(&self, chosen: &[usize], fitted: &Evaluation, findings: &mut [JointFinding]) {
         let mut best: BTreeMap<(usize, EffectKind), (Verdict, usize)> = BTreeMap::new();
         let mut refinements: BTreeMap<usize, (Verdict, usize)> = BTreeMap::new();
@@ -1482,7 +1492,8 @@ impl EffortProblem<'_> {
             let why = self.rejection_reason(chosen, fitted, v, c);
             let why = match refined {
                 Some((rv, theta, r)) => format!(
-                    "{why}; {} would cut the held-out error by {:.0} %, but is a refinement of a law that was not reported",
+                    "{why}; {} would cut the held-out error by {:.0} %, but departs from the same law both ways by no more than \
+                     the recording can tell (within two σ, a weight error or a negligible effort), and that law alone does not pass",
                     refinement_text(&self.effect_of(r, &theta)),
                     100.0 * rv.gain
                 ),
@@ -1522,10 +1533,11 @@ impl EffortProblem<'_> {
                 out.push((
                     row,
                     format!(
-                        "coulomb_friction with friction_reverse: {} explains the recording as well as the reported coulomb_friction and \
+                        "coulomb_friction with friction_reverse: {} explains the recording as well as the reported {} and \
                          effort_offset (held-out error {:+.1} %): while the joint moves the two are one law, and the reading of robot \
                          identification (the same friction both ways, an offset) is reported",
                         refinement_text(&self.effect_of(x, &e.theta)),
+                        self.candidates[f].kind.name(),
                         100.0 * (sse - mine) / mine.max(f64::MIN_POSITIVE)
                     ),
                 ));
@@ -1554,6 +1566,13 @@ impl EffortProblem<'_> {
             )
         } else if v.gain < self.rules.min_cv_gain {
             format!("held-out error {:+.1} % — not better on data it was not fitted to", -100.0 * v.gain)
+        } else if self.passes(&v) {
+            format!(
+                "beside the reported terms it passes (held-out error {:+.1} %, better in {:.0} % of the blocks), but a term of its \
+                 joint's family replaced it or it was settled away",
+                -100.0 * v.gain,
+                100.0 * v.fold_share
+            )
         } else {
             format!("better in only {:.0} % of the held-out blocks", 100.0 * v.fold_share)
         }

@@ -252,78 +252,100 @@ fn identify_at<'a>(
     Some(Identified { band, sig, rows, problem, terms, train, stops, findings, train_findings })
 }
 
-/// Mean over `dofs` of the held-out squared error of `replayed` against the positions (samples
-/// from `t_split` on), each relative to that of `reference` (the model as written).
-fn held_out_score(
-    rec: &Recording,
-    positions: &[Vec<f64>],
-    replayed: &[Vec<f64>],
-    reference: &[Vec<f64>],
-    dofs: &[usize],
+/// What a chain's held-out replay is judged against: the recording, the tree, and the replay of
+/// the model as written from the same states.
+struct HeldOutReplay<'a> {
+    model: &'a GapModel,
+    rec: &'a Recording,
+    positions: &'a [Vec<f64>],
+    tree: &'a MultiBody,
+    body_of_link: &'a [Option<usize>],
+    input: &'a ChainInput<'a>,
     t_split: f64,
-) -> f64 {
-    let mse = |d: usize, r: &[Vec<f64>]| {
-        let (s, c) = (0..rec.time_s.len())
-            .filter(|&i| rec.time_s[i] >= t_split)
-            .map(|i| positions[d][i] - r[d][i])
-            .filter(|e| e.is_finite())
-            .fold((0.0, 0usize), |(s, c), e| (s + e * e, c + 1));
-        if c == 0 { f64::NAN } else { s / c as f64 }
-    };
-    let ratios: Vec<f64> = dofs.iter().map(|&d| mse(d, replayed) / mse(d, reference)).filter(|x| x.is_finite()).collect();
-    if ratios.is_empty() { f64::NAN } else { ratios.iter().sum::<f64>() / ratios.len() as f64 }
+    held_before: &'a [Vec<f64>],
+}
+
+impl HeldOutReplay<'_> {
+    /// Mean over `dofs` of the held-out squared error (samples from `t_split` on) of the chain
+    /// under `findings`, replayed in pieces, each relative to that of the model as written over
+    /// the same samples; infinite when the replay leaves the finite numbers where the recording
+    /// and the model as written do not (an unstable law); NaN when no dof can be judged.
+    fn score(&self, findings: &[JointFinding], sig: &Signals, horizon_s: f64, dofs: &[usize]) -> f64 {
+        let (physics, fitted) = fitted_physics(self.model, self.tree, self.body_of_link, &effects_by_joint(findings));
+        let replayed = replay_pieces(&fitted, &physics, self.input, sig, self.t_split, horizon_s);
+        let mut ratios = Vec::new();
+        for &d in dofs {
+            let (mut mine, mut theirs, mut count) = (0.0, 0.0, 0usize);
+            for i in (0..self.rec.time_s.len()).filter(|&i| self.rec.time_s[i] >= self.t_split) {
+                let (y, reference) = (self.positions[d][i], self.held_before[d][i]);
+                if !(y.is_finite() && reference.is_finite()) {
+                    continue;
+                }
+                let e = y - replayed[d][i];
+                if !e.is_finite() {
+                    return f64::INFINITY;
+                }
+                mine += e * e;
+                theirs += (y - reference).powi(2);
+                count += 1;
+            }
+            if count > 0 && theirs > 0.0 {
+                ratios.push(mine / theirs);
+            }
+        }
+        if ratios.is_empty() { f64::NAN } else { ratios.iter().sum::<f64>() / ratios.len() as f64 }
+    }
 }
 
 /// Effort space's reading of each chain joint's friction, checked against the motion it
-/// predicts: where a joint holds dry friction or viscous damping (one of the two), the other law
-/// in its place is fitted on the same data before the held-out part, and the whole chain is
-/// replayed through that part under both; the other reading replaces effort space's when its
-/// replay is better by [`SelectionRules::min_replay_gain`] (and the whole recording's problem
-/// reads the joint the same way). Equation error (effort space) is blind to how a small
-/// difference in the law adds up over a swing; output error sees it (Gautier's DIDIM validates
-/// an IDIM model the same way). A joint alone on its body is refined by its own simulation.
-#[allow(clippy::too_many_arguments)]
-fn settle_friction_by_replay(
-    model: &GapModel,
-    rec: &Recording,
-    positions: &[Vec<f64>],
-    tree: &MultiBody,
-    body_of_link: &[Option<usize>],
-    input: &ChainInput<'_>,
-    found: &mut Identified<'_>,
-    t_split: f64,
-    held_before: &[Vec<f64>],
-    rules: &SelectionRules,
-) {
+/// predicts: where a joint holds dry friction or viscous damping (one of the two), and the other
+/// law passes the selection rules in its place, it is fitted on the same data before the
+/// held-out part, and the whole chain is replayed through that part under both; the other
+/// reading replaces effort space's when its replay error is lower by
+/// [`SelectionRules::min_replay_gain`] (and the whole recording's problem reads the joint the
+/// same way). Equation error (effort space) weighs the efforts sample by sample and is blind to
+/// how a difference in the law adds up over a swing; output error sees it (Gautier's DIDIM
+/// validates an IDIM model the same way). A joint alone on its body is refined by its own
+/// simulation. The reading replaced is named among the rejected, with the replay's figures.
+fn settle_friction_by_replay(replay: &HeldOutReplay<'_>, found: &mut Identified<'_>, rules: &SelectionRules) {
     let Some((train_problem, train_terms)) = found.train.as_mut() else { return };
     let Some(train_findings) = found.train_findings.as_mut() else { return };
-    let dofs = model.dofs();
-    let chain: Vec<usize> = (0..found.rows.len()).filter(|&r| in_serial_chain(model, found.rows[r])).collect();
+    let dofs = replay.model.dofs();
+    let chain: Vec<usize> = (0..found.rows.len()).filter(|&r| in_serial_chain(replay.model, found.rows[r])).collect();
     let chain_dofs: Vec<usize> = chain.iter().filter_map(|&r| dofs.iter().position(|&j| j == found.rows[r])).collect();
     let horizon_s = found.band.held_out_horizon_s();
-    let score = |findings: &[JointFinding]| {
-        let (physics, fitted) = fitted_physics(model, tree, body_of_link, &effects_by_joint(findings));
-        let held = replay_pieces(&fitted, &physics, input, &found.sig, t_split, horizon_s);
-        held_out_score(rec, positions, &held, held_before, &chain_dofs, t_split)
-    };
-    let mut current = score(train_findings);
+    let mut current = replay.score(train_findings, &found.sig, horizon_s, &chain_dofs);
     for &r in &chain {
         let (Some(alt_train), Some(alt)) =
             (train_problem.other_friction_reading(train_terms, r), found.problem.other_friction_reading(&found.terms, r))
         else {
             continue;
         };
-        if found.problem.friction_is_dry(&alt, r) != train_problem.friction_is_dry(&alt_train, r) {
+        let (Some(law), Some(old)) = (found.problem.friction_law(&alt, r), found.problem.friction_law(&found.terms, r)) else {
+            continue;
+        };
+        if Some(law) != train_problem.friction_law(&alt_train, r) {
             continue;
         }
         let alt_train_findings = findings_with_stops(train_problem, &alt_train, &found.stops);
-        let s = score(&alt_train_findings);
+        let s = replay.score(&alt_train_findings, &found.sig, horizon_s, &chain_dofs);
         if s < (1.0 - rules.min_replay_gain) * current {
-            current = s;
             *train_terms = alt_train;
             *train_findings = alt_train_findings;
             found.findings = findings_with_stops(&found.problem, &alt, &found.stops);
             found.terms = alt;
+            let rejected = &mut found.findings[r].rejected;
+            rejected.retain(|line| !line.starts_with(&format!("{}:", old.name())));
+            rejected.push(format!(
+                "{}: effort space chose it, but with {} in its place the chain replays its held-out part with {:.0} % less \
+                 squared error (relative to the model as written: {:.2e} against {:.2e}), so the law that predicts the motion is reported",
+                old.name(),
+                law.name(),
+                100.0 * (1.0 - s / current),
+                s,
+                current
+            ));
+            current = s;
         }
     }
 }
@@ -377,7 +399,17 @@ pub(super) fn analyze_effort_space(
     let horizon_s = found.band.held_out_horizon_s();
     let (nominal_physics, _) = fitted_physics(model, &tree, &body_of_link, &BTreeMap::new());
     let held_before = replay_pieces(&tree, &nominal_physics, &input, &found.sig, t_split, horizon_s);
-    settle_friction_by_replay(model, rec, &positions, &tree, &body_of_link, &input, &mut found, t_split, &held_before, &rules);
+    let replay = HeldOutReplay {
+        model,
+        rec,
+        positions: &positions,
+        tree: &tree,
+        body_of_link: &body_of_link,
+        input: &input,
+        t_split,
+        held_before: &held_before,
+    };
+    settle_friction_by_replay(&replay, &mut found, &rules);
     let Identified { band, sig, rows, findings, train_findings, .. } = found;
     let rows = rows.as_slice();
     let before = replay_from(&tree, &nominal_physics, &input, &sig, start);
