@@ -613,9 +613,10 @@ const DOUBLE_PENDULUM: &str = r#"<robot name="double_pendulum">
 </robot>"#;
 
 /// The textbook equations of motion of [`DOUBLE_PENDULUM`] (Lagrange, written out by hand: not
-/// the library's multibody code), released from (q1, q2) at rest and integrated by RK4 at 10 kHz;
-/// a CSV sampled at 200 Hz.
-fn double_pendulum_csv(q1: f64, q2: f64, duration_s: f64) -> String {
+/// the library's multibody code), with dry friction of `friction` N·m at the shoulder and the
+/// elbow (smooth over 0.01 rad/s), released from (q1, q2) at rest and integrated by RK4 at
+/// 10 kHz; a CSV sampled at 200 Hz.
+fn double_pendulum_csv(q1: f64, q2: f64, duration_s: f64, friction: [f64; 2]) -> String {
     let (m1, r1, ic1, m2, l1, r2, ic2, g) = (0.6, 0.17, 0.004, 0.65, 0.2, 0.28, 0.0034, 9.81);
     let (i1, i2) = (ic1 + m1 * r1 * r1, ic2 + m2 * r2 * r2);
     let accel = |s: [f64; 4]| -> [f64; 4] {
@@ -625,8 +626,8 @@ fn double_pendulum_csv(q1: f64, q2: f64, duration_s: f64) -> String {
         let (m11, m12, m22) = (i1 + i2 + m2 * l1 * l1 + 2.0 * h * c2, i2 + h * c2, i2);
         let gravity1 = (m1 * r1 + m2 * l1) * g * a.sin() + m2 * g * r2 * (a + b).sin();
         let gravity2 = m2 * g * r2 * (a + b).sin();
-        let rhs1 = -(-2.0 * h * s2 * va * vb - h * s2 * vb * vb) - gravity1;
-        let rhs2 = -(h * s2 * va * va) - gravity2;
+        let rhs1 = -(-2.0 * h * s2 * va * vb - h * s2 * vb * vb) - gravity1 - friction[0] * (va / 0.01).tanh();
+        let rhs2 = -(h * s2 * va * va) - gravity2 - friction[1] * (vb / 0.01).tanh();
         let det = m11 * m22 - m12 * m12;
         [va, vb, (m22 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det]
     };
@@ -656,7 +657,7 @@ fn double_pendulum_csv(q1: f64, q2: f64, duration_s: f64) -> String {
 #[test]
 fn a_double_pendulum_released_away_from_rest_replays_from_its_own_start() {
     let model = parse_model(DOUBLE_PENDULUM, Path::new("double_pendulum.urdf")).expect("model parses");
-    let rec = parse_recording(&double_pendulum_csv(0.6, -0.4, 5.0), Path::new("released.csv")).expect("parses");
+    let rec = parse_recording(&double_pendulum_csv(0.6, -0.4, 5.0, [0.0, 0.0]), Path::new("released.csv")).expect("parses");
     let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
     assert!(report.effects.is_empty(), "nothing is missing: {:?}", report.effects);
     for joint in ["shoulder", "elbow"] {
@@ -783,5 +784,21 @@ fn a_real_double_pendulums_elbow_friction_is_read_by_the_motion_it_predicts() {
     for joint in ["shoulder", "elbow"] {
         let held = &report.held_out.per_joint[joint];
         assert!(held.rmse_after < 0.016, "{joint}: held-out replay {} rad", held.rmse_after);
+    }
+}
+
+/// The replay rule must not turn a right reading round: a double pendulum with dry friction at
+/// both joints (the library's multibody code plays no part in making it), released and left to
+/// swing, is read as dry friction at both (levels within 25 %), with no viscous damping.
+#[test]
+fn a_chain_with_dry_friction_keeps_it_through_the_replay_check() {
+    let model = parse_model(DOUBLE_PENDULUM, Path::new("double_pendulum.urdf")).expect("model parses");
+    let rec = parse_recording(&double_pendulum_csv(1.2, -0.6, 10.0, [0.1, 0.05]), Path::new("dry.csv")).expect("parses");
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
+    for (joint, level) in [("shoulder", 0.1), ("elbow", 0.05)] {
+        let dry = report.effects.iter().find(|e| e.joint == joint && e.kind == "coulomb_friction");
+        assert!(dry.is_some_and(|e| (e.params["friction"] - level).abs() < 0.25 * level), "{joint}: {found:?}");
+        assert!(!report.effects.iter().any(|e| e.joint == joint && e.kind == "viscous_damping"), "{joint}: {found:?}");
     }
 }
