@@ -923,6 +923,16 @@ fn jackknife_sd(values: &[f64], folds: usize) -> f64 {
     ((k - 1.0) / k * vals.iter().map(|x| (x - mean).powi(2)).sum::<f64>()).sqrt()
 }
 
+/// A candidate put into a set of terms ([`EffortProblem::best_in_place`]).
+struct InPlace {
+    candidate: usize,
+    /// The set with it.
+    set: Vec<usize>,
+    fit: Evaluation,
+    /// Held-out squared error of its joint under `fit`.
+    sse: f64,
+}
+
 /// Fewest held-out samples for a fold to count in the fold share.
 const MIN_FOLD_SAMPLES: usize = 10;
 
@@ -1140,17 +1150,31 @@ impl EffortProblem<'_> {
     /// best beside `rest`, with its evaluation.
     fn best_base(&self, rest: &[usize], c: usize, banned: &[bool]) -> Option<(usize, Evaluation)> {
         let cand = &self.candidates[c];
+        let base = |b: usize| {
+            let x = &self.candidates[b];
+            x.family == cand.family && !x.is_refinement() && !banned[b]
+        };
+        self.best_in_place(rest, cand.row, base, |_, _| true).map(|v| (v.candidate, v.fit))
+    }
+
+    /// Among the candidates on joint `row` that `pick` takes, the one that, put into `rest` in
+    /// place of its family's member there, leaves the least held-out error on that joint and
+    /// that `accept` takes with its fit (the earliest on a tie).
+    fn best_in_place(
+        &self,
+        rest: &[usize],
+        row: usize,
+        pick: impl Fn(usize) -> bool,
+        accept: impl Fn(usize, &Evaluation) -> bool,
+    ) -> Option<InPlace> {
         (0..self.candidates.len())
-            .filter(|&b| {
-                let x = &self.candidates[b];
-                x.row == cand.row && x.family == cand.family && !x.is_refinement() && !banned[b]
+            .filter(|&x| self.candidates[x].row == row && pick(x))
+            .filter_map(|x| {
+                let set = self.with(rest, x);
+                let fit = self.evaluate(&set);
+                accept(x, &fit).then(|| InPlace { candidate: x, sse: fit.row_sse(row), set, fit })
             })
-            .map(|b| {
-                let e = self.evaluate(&self.with(rest, b));
-                (self.rows_of(b).iter().map(|&r| e.row_sse(r)).sum::<f64>(), b, e)
-            })
-            .min_by(|x, y| x.0.total_cmp(&y.0))
-            .map(|(_, b, e)| (b, e))
+            .min_by(|a, b| a.sse.total_cmp(&b.sse))
     }
 
     /// Friction that differs by direction and the same friction both ways beside a constant
@@ -1186,17 +1210,11 @@ impl EffortProblem<'_> {
             .find(|&x| on_row(x, Family::Constant) && self.candidates[x].kind == EffectKind::EffortOffset && !banned[x])?;
         let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).chain([offset]).collect();
         let mine = self.evaluate(chosen).row_sse(row);
-        let (sse, set) = (0..self.candidates.len())
-            .filter(|&x| on_row(x, Family::Friction) && !self.candidates[x].is_refinement() && !banned[x])
-            .filter_map(|x| {
-                let set = self.with(&rest, x);
-                let e = self.evaluate(&set);
-                (self.plausible(x, &e.theta)).then(|| (e.row_sse(row), set))
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0))?;
+        let both_ways = |x: usize| self.candidates[x].family == Family::Friction && !self.candidates[x].is_refinement() && !banned[x];
+        let InPlace { set, fit, sse, .. } = self.best_in_place(&rest, row, both_ways, |x, e| self.plausible(x, &e.theta))?;
         // The offset must matter as a term of its own.
         let without_offset: Vec<usize> = set.iter().copied().filter(|&x| x != offset).collect();
-        let material = self.material(&self.verdict(&self.evaluate(&without_offset), &self.evaluate(&set), &[row], offset, None));
+        let material = self.material(&self.verdict(&self.evaluate(&without_offset), &fit, &[row], offset, None));
         (material && sse.is_finite() && sse <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE)).then_some(set)
     }
 
@@ -1357,19 +1375,13 @@ impl EffortProblem<'_> {
         let rest: Vec<usize> =
             terms.0.iter().copied().filter(|&c| !(self.candidates[c].row == r && self.candidates[c].family == from)).collect();
         let rest_fit = self.evaluate(&rest);
-        (0..self.candidates.len())
-            .filter(|&c| self.candidates[c].row == r && self.candidates[c].family == to && self.may_enter(&rest, c))
-            .filter_map(|c| {
-                let set = self.with(&rest, c);
-                let e = self.evaluate(&set);
-                // The other law must be a term the rules accept beside the rest.
-                self.passes(&self.verdict(&rest_fit, &e, &self.rows_of(c), c, None)).then(|| (e.row_sse(r), set))
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0))
-            .map(|(_, mut set)| {
-                set.sort_unstable();
-                Terms(set)
-            })
+        let other = |c: usize| self.candidates[c].family == to && self.may_enter(&rest, c);
+        // The other law must be a term the rules accept beside the rest.
+        let passes = |c: usize, e: &Evaluation| self.passes(&self.verdict(&rest_fit, e, &self.rows_of(c), c, None));
+        self.best_in_place(&rest, r, other, passes).map(|mut v| {
+            v.set.sort_unstable();
+            Terms(v.set)
+        })
     }
 
     /// The findings of `terms`: per joint, the terms with jackknife σ, confidence, sizes, the
@@ -1465,7 +1477,7 @@ impl EffortProblem<'_> {
     /// law's reason.
     fn explain_rejections(&self, chosen: &[usize], fitted: &Evaluation, findings: &mut [JointFinding]) {
         let mut best: BTreeMap<(usize, EffectKind), (Verdict, usize)> = BTreeMap::new();
-        let mut refinements: BTreeMap<usize, (Verdict, usize)> = BTreeMap::new();
+        let mut refinements: BTreeMap<usize, (Verdict, usize, BTreeMap<usize, f64>)> = BTreeMap::new();
         for c in 0..self.candidates.len() {
             let cand = &self.candidates[c];
             if chosen.iter().any(|&x| self.candidates[x].row == cand.row && self.candidates[x].kind == cand.kind) {
@@ -1473,28 +1485,23 @@ impl EffortProblem<'_> {
             }
             let e = self.evaluate(&self.with(chosen, c));
             let v = self.verdict(fitted, &e, &self.rows_of(c), c, self.family_member(chosen, c));
-            let into = if self.may_enter(chosen, c) {
-                best.entry((cand.row, cand.kind)).or_insert((v, c))
-            } else if self.passes(&v) {
-                refinements.entry(cand.row).or_insert((v, c))
-            } else {
-                continue;
-            };
-            if v.gain > into.0.gain {
-                *into = (v, c);
+            if self.may_enter(chosen, c) {
+                let into = best.entry((cand.row, cand.kind)).or_insert((v, c));
+                if v.gain > into.0.gain {
+                    *into = (v, c);
+                }
+            } else if self.passes(&v) && refinements.get(&cand.row).is_none_or(|(rv, _, _)| v.gain > rv.gain) {
+                refinements.insert(cand.row, (v, c, e.theta));
             }
         }
         for ((row, kind), (v, c)) in best {
-            let refined = refinements
-                .get(&row)
-                .filter(|(_, r)| self.candidates[*r].family == self.candidates[c].family)
-                .map(|&(rv, r)| (rv, self.evaluate(&self.with(chosen, r)).theta, r));
+            let refined = refinements.get(&row).filter(|(_, r, _)| self.candidates[*r].family == self.candidates[c].family);
             let why = self.rejection_reason(chosen, fitted, v, c);
             let why = match refined {
-                Some((rv, theta, r)) => format!(
+                Some((rv, r, theta)) => format!(
                     "{why}; {} would cut the held-out error by {:.0} %, but departs from the same law both ways by no more than \
                      the recording can tell (within two σ, a weight error or a negligible effort), and that law alone does not pass",
-                    refinement_text(&self.effect_of(r, &theta)),
+                    refinement_text(&self.effect_of(*r, theta)),
                     100.0 * rv.gain
                 ),
                 None => why,
@@ -1518,17 +1525,10 @@ impl EffortProblem<'_> {
             };
             let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != o && x != f).collect();
             let mine = fitted.row_sse(row);
-            let best = (0..self.candidates.len())
-                .filter(|&x| {
-                    self.candidates[x].row == row && self.candidates[x].kind == EffectKind::CoulombFriction && self.candidates[x].asymmetric
-                })
-                .map(|x| {
-                    let e = self.evaluate(&self.with(&rest, x));
-                    (e.row_sse(row), x, e)
-                })
-                .min_by(|a, b| a.0.total_cmp(&b.0));
-            if let Some((sse, x, e)) =
-                best.filter(|(sse, x, e)| *sse <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE) && self.plausible(*x, &e.theta))
+            let by_direction = |x: usize| self.candidates[x].kind == EffectKind::CoulombFriction && self.candidates[x].asymmetric;
+            let best = self.best_in_place(&rest, row, by_direction, |_, _| true);
+            if let Some(InPlace { candidate: x, fit: e, sse, .. }) =
+                best.filter(|v| v.sse <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE) && self.plausible(v.candidate, &v.fit.theta))
             {
                 out.push((
                     row,

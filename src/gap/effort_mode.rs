@@ -266,13 +266,18 @@ struct HeldOutReplay<'a> {
 }
 
 impl HeldOutReplay<'_> {
-    /// Mean over `dofs` of the held-out squared error (samples from `t_split` on) of the chain
-    /// under `findings`, replayed in pieces, each relative to that of the model as written over
-    /// the same samples; infinite when the replay leaves the finite numbers where the recording
-    /// and the model as written do not (an unstable law); NaN when no dof can be judged.
-    fn score(&self, findings: &[JointFinding], sig: &Signals, horizon_s: f64, dofs: &[usize]) -> f64 {
+    /// The chain under `findings` replayed through the held-out part (samples from `t_split`
+    /// on) in pieces of `horizon_s`, each from the measured state.
+    fn replay(&self, findings: &[JointFinding], sig: &Signals, horizon_s: f64) -> Vec<Vec<f64>> {
         let (physics, fitted) = fitted_physics(self.model, self.tree, self.body_of_link, &effects_by_joint(findings));
-        let replayed = replay_pieces(&fitted, &physics, self.input, sig, self.t_split, horizon_s);
+        replay_pieces(&fitted, &physics, self.input, sig, self.t_split, horizon_s)
+    }
+
+    /// Mean over `dofs` of the held-out squared error of `replayed` ([`Self::replay`]), each
+    /// relative to that of the model as written over the same samples; infinite when the replay
+    /// leaves the finite numbers where the recording and the model as written do not (an
+    /// unstable law); NaN when no dof can be judged.
+    fn score(&self, replayed: &[Vec<f64>], dofs: &[usize]) -> f64 {
         let mut ratios = Vec::new();
         for &d in dofs {
             let (mut mine, mut theirs, mut count) = (0.0, 0.0, 0usize);
@@ -307,14 +312,21 @@ impl HeldOutReplay<'_> {
 /// how a difference in the law adds up over a swing; output error sees it (Gautier's DIDIM
 /// validates an IDIM model the same way). A joint alone on its body is refined by its own
 /// simulation. The reading replaced is named among the rejected, with the replay's figures.
-fn settle_friction_by_replay(replay: &HeldOutReplay<'_>, found: &mut Identified<'_>, rules: &SelectionRules) {
-    let Some((train_problem, train_terms)) = found.train.as_mut() else { return };
-    let Some(train_findings) = found.train_findings.as_mut() else { return };
+///
+/// Returns the held-out replay of the training findings it ends with, when it made one (none
+/// without a joint in a chain).
+fn settle_friction_by_replay(replay: &HeldOutReplay<'_>, found: &mut Identified<'_>, rules: &SelectionRules) -> Option<Vec<Vec<f64>>> {
+    let (train_problem, train_terms) = found.train.as_mut()?;
+    let train_findings = found.train_findings.as_mut()?;
     let dofs = replay.model.dofs();
     let chain: Vec<usize> = (0..found.rows.len()).filter(|&r| in_serial_chain(replay.model, found.rows[r])).collect();
+    if chain.is_empty() {
+        return None;
+    }
     let chain_dofs: Vec<usize> = chain.iter().filter_map(|&r| dofs.iter().position(|&j| j == found.rows[r])).collect();
     let horizon_s = found.band.held_out_horizon_s();
-    let mut current = replay.score(train_findings, &found.sig, horizon_s, &chain_dofs);
+    let mut held = replay.replay(train_findings, &found.sig, horizon_s);
+    let mut current = replay.score(&held, &chain_dofs);
     for &r in &chain {
         let (Some(alt_train), Some(alt)) =
             (train_problem.other_friction_reading(train_terms, r), found.problem.other_friction_reading(&found.terms, r))
@@ -328,8 +340,10 @@ fn settle_friction_by_replay(replay: &HeldOutReplay<'_>, found: &mut Identified<
             continue;
         }
         let alt_train_findings = findings_with_stops(train_problem, &alt_train, &found.stops);
-        let s = replay.score(&alt_train_findings, &found.sig, horizon_s, &chain_dofs);
+        let alt_held = replay.replay(&alt_train_findings, &found.sig, horizon_s);
+        let s = replay.score(&alt_held, &chain_dofs);
         if s < (1.0 - rules.min_replay_gain) * current {
+            held = alt_held;
             *train_terms = alt_train;
             *train_findings = alt_train_findings;
             found.findings = findings_with_stops(&found.problem, &alt, &found.stops);
@@ -348,6 +362,7 @@ fn settle_friction_by_replay(replay: &HeldOutReplay<'_>, found: &mut Identified<
             current = s;
         }
     }
+    Some(held)
 }
 
 /// Effort-space analysis of `rows` (model joint indices); one outcome per row.
@@ -409,16 +424,14 @@ pub(super) fn analyze_effort_space(
         t_split,
         held_before: &held_before,
     };
-    settle_friction_by_replay(&replay, &mut found, &rules);
+    let settled = settle_friction_by_replay(&replay, &mut found, &rules);
     let Identified { band, sig, rows, findings, train_findings, .. } = found;
     let rows = rows.as_slice();
     let before = replay_from(&tree, &nominal_physics, &input, &sig, start);
     let (physics, tree_fitted) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(&findings));
     let after = replay_from(&tree_fitted, &physics, &input, &sig, start);
-    let held = train_findings.as_ref().map(|f| {
-        let (p, t) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(f));
-        replay_pieces(&t, &p, &input, &sig, t_split, horizon_s)
-    });
+    // The settling replayed the training findings it kept; otherwise they are replayed here.
+    let held = settled.or_else(|| train_findings.as_ref().map(|f| replay.replay(f, &sig, horizon_s)));
 
     let mut out = Vec::with_capacity(rows.len());
     let mut given = BTreeMap::new();
