@@ -1,5 +1,5 @@
 //! Interaction recordings (spec `gap-recording.md` §2): CSV with `# key: value` metadata lines,
-//! one header row, a strictly increasing `time` column, joint positions and efforts, tracked link
+//! one header row, a strictly increasing `time` column, joint positions, efforts and (checked, unused) velocities, tracked link
 //! poses; empty cells are dropouts. Every rejection names the file, line, column and field.
 //!
 //! Before the header, blank lines are skipped and every line starting with `#` must be
@@ -21,6 +21,12 @@ pub enum Channel {
     JointPosition(String),
     /// `<joint>.effort`: applied generalized effort (N·m or N).
     JointEffort(String),
+    /// `<joint>.velocity`: measured joint velocity (rad/s or m/s), as robot logs and ROS
+    /// `JointState` carry it beside the position. Read and checked, not used: velocities and
+    /// accelerations come from the positions, through the same filter as every term and the
+    /// efforts (parallel filtering); a velocity measured by other means (a drive's own
+    /// differentiation, its own filter and delay) would put the two sides out of step.
+    JointVelocity(String),
     /// `<link>.pos.<axis>`: world position of the link frame, axis 0..3 = x, y, z.
     LinkPosition(String, usize),
     /// `<link>.quat.<c>`: world orientation of the link, component 0..4 = w, x, y, z.
@@ -81,9 +87,10 @@ fn channel_of(name: &str) -> Option<Channel> {
     if name == "time" {
         return Some(Channel::Time);
     }
-    let suffixes: [(&str, Make); 9] = [
+    let suffixes: [(&str, Make); 10] = [
         (".q", Channel::JointPosition),
         (".effort", Channel::JointEffort),
+        (".velocity", Channel::JointVelocity),
         (".pos.x", |n| Channel::LinkPosition(n, 0)),
         (".pos.y", |n| Channel::LinkPosition(n, 1)),
         (".pos.z", |n| Channel::LinkPosition(n, 2)),
@@ -142,7 +149,7 @@ pub fn parse_recording(text: &str, file: &Path) -> Result<Recording, GapError> {
                         line_no,
                         c + 1,
                         "header",
-                        "`time`, `<joint>.q`, `<joint>.effort`, `<link>.pos.x|y|z` or `<link>.quat.w|x|y|z`",
+                        "`time`, `<joint>.q`, `<joint>.effort`, `<joint>.velocity`, `<link>.pos.x|y|z` or `<link>.quat.w|x|y|z`",
                         name,
                     ));
                 };
@@ -243,6 +250,8 @@ pub fn parse_recording(text: &str, file: &Path) -> Result<Recording, GapError> {
                     .collect();
                 recording.joint_effort.insert(j, values);
             }
+            // Checked above (finite or empty), not used: see `Channel::JointVelocity`.
+            Channel::JointVelocity(_) => {}
             Channel::LinkPosition(l, axis) => {
                 let track = recording.links.entry(l).or_default();
                 track.position_m.get_or_insert_with(|| [Vec::new(), Vec::new(), Vec::new()])[axis] = values;
@@ -285,7 +294,9 @@ impl Recording {
         for (c, (name, channel)) in self.columns.iter().enumerate() {
             let (ok, what) = match channel {
                 Channel::Time => continue,
-                Channel::JointPosition(j) | Channel::JointEffort(j) => (joint_names.contains(&j.as_str()), "a movable joint of the model"),
+                Channel::JointPosition(j) | Channel::JointEffort(j) | Channel::JointVelocity(j) => {
+                    (joint_names.contains(&j.as_str()), "a movable joint of the model")
+                }
                 Channel::LinkPosition(l, _) | Channel::LinkQuaternion(l, _) => (link_names.contains(&l.as_str()), "a link of the model"),
             };
             if !ok {
@@ -317,6 +328,20 @@ mod tests {
         assert!((r.gravity_mps2[2] + 9.8).abs() < 1e-12 && r.gravity_mps2[0] == 0.0);
         assert_eq!(r.metadata["extra"], "kept");
         assert_eq!(r.header_line, 4);
+    }
+
+    #[test]
+    fn a_robot_log_with_measured_velocities_is_read_and_its_velocities_checked() {
+        // Regression: a CSV written from ROS `JointState` (position, velocity, effort) was refused
+        // at its `.velocity` header cell.
+        let text = "time,arm.q,arm.velocity,arm.effort\n0,0.1,0.0,1\n0.01,0.11,1.0,1\n";
+        let r = parse_recording(text, Path::new("log.csv")).expect("parses");
+        assert_eq!(r.joint_q["arm"], vec![0.1, 0.11]);
+        assert!(r.check_names(&["arm"], &[]).is_ok());
+        let e = r.check_names(&["elbow"], &[]).expect_err("no joint arm");
+        assert!(matches!(e, GapError::Csv { line: 1, column: 2, .. }), "{e}");
+        let e = parse_recording("time,arm.q,arm.velocity\n0,0.1,fast\n", Path::new("log.csv")).expect_err("not a number");
+        assert!(matches!(e, GapError::Csv { line: 2, column: 3, .. }), "{e}");
     }
 
     #[test]
