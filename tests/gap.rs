@@ -617,7 +617,14 @@ const DOUBLE_PENDULUM: &str = r#"<robot name="double_pendulum">
 /// elbow (smooth over 0.01 rad/s), released from (q1, q2) at rest and integrated by RK4 at
 /// 10 kHz; a CSV sampled at 200 Hz.
 fn double_pendulum_csv(q1: f64, q2: f64, duration_s: f64, friction: [f64; 2]) -> String {
-    let (m1, r1, ic1, m2, l1, r2, ic2, g) = (0.6, 0.17, 0.004, 0.65, 0.2, 0.28, 0.0034, 9.81);
+    double_pendulum_with_load_csv(q1, q2, duration_s, friction, (0.0, 0.0))
+}
+
+/// [`double_pendulum_csv`] with a load of (mass kg, inertia kg·m² about its centre) carried
+/// rigidly at the lower link's centre of mass.
+fn double_pendulum_with_load_csv(q1: f64, q2: f64, duration_s: f64, friction: [f64; 2], load: (f64, f64)) -> String {
+    let (m1, r1, ic1, l1, r2, g) = (0.6, 0.17, 0.004, 0.2, 0.28, 9.81);
+    let (m2, ic2) = (0.65 + load.0, 0.0034 + load.1);
     let (i1, i2) = (ic1 + m1 * r1 * r1, ic2 + m2 * r2 * r2);
     let accel = |s: [f64; 4]| -> [f64; 4] {
         let [a, b, va, vb] = s;
@@ -666,6 +673,35 @@ fn a_double_pendulum_released_away_from_rest_replays_from_its_own_start() {
         let held = &report.held_out.per_joint[joint];
         assert!(held.rmse_before < 0.02, "{joint}: the held-out replay misses by {} rad", held.rmse_before);
     }
+}
+
+/// Broke: one joint of the model without a recorded position (a gripper's finger on an arm
+/// whose joints alone are logged) sent the whole tree to position space, where a 7-joint arm
+/// took 50 s and was read as springs, dampers and `unknown` on every joint. A subtree nothing
+/// measures is now welded where it stands (held at 0, as the note says) and the measured joints
+/// keep effort space: a double pendulum carrying a gripper on a slide that no column records,
+/// released, replays to the integration error and names nothing.
+#[test]
+fn a_gripper_that_is_not_recorded_rides_welded_and_the_arm_keeps_effort_space() {
+    let with_gripper = DOUBLE_PENDULUM.replace(
+        "</robot>",
+        r#"<link name="finger"><inertial><origin xyz="0 0 0"/><mass value="0.2"/>
+    <inertia ixx="0.0002" iyy="0.0002" izz="0.0001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="finger_slide" type="prismatic"><parent link="lower"/><child link="finger"/><origin xyz="0 0 -0.28"/>
+    <axis xyz="1 0 0"/><limit lower="0" upper="0.04" effort="10" velocity="0.2"/></joint>
+</robot>"#,
+    );
+    let model = parse_model(&with_gripper, Path::new("gripper.urdf")).expect("model parses");
+    let csv = double_pendulum_with_load_csv(0.6, -0.4, 5.0, [0.0, 0.0], (0.2, 0.0002));
+    let rec = parse_recording(&csv, Path::new("arm_only.csv")).expect("parses");
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    assert!(report.effects.is_empty(), "nothing is missing: {:?}", report.effects);
+    for joint in ["shoulder", "elbow"] {
+        assert_eq!(report.joints[joint].mode, "effort", "{joint}: {}", report.joints[joint].why);
+        let fit = &report.fit.per_joint[joint];
+        assert!(fit.rmse_before < 0.02, "{joint}: the replay misses the recording by {} rad", fit.rmse_before);
+    }
+    assert!(report.notes.iter().any(|n| n.contains("finger_slide") && n.contains("welded")), "{:?}", report.notes);
 }
 
 /// The real recordings of `../shared/data/recordings/` (made by others on real hardware), or

@@ -80,7 +80,8 @@ struct JointOutcome {
 ///
 /// Each joint goes in one of two ways, chosen from what the recording holds: **effort space**
 /// ([`effort`]) for joints whose effort is recorded while every joint of the model has its
-/// position recorded (inverse dynamics of the whole tree gives the residual effort), **position
+/// position recorded, a subtree no column measures welded at 0 (inverse dynamics of the whole
+/// tree gives the residual effort), **position
 /// space** ([`fit`], [`select`]) for the others (simulation of the joint, the recorded motion of
 /// the other joints driving it through the coupling efforts).
 pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<GapReport, GapError> {
@@ -99,18 +100,25 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
         });
     }
     let mut notes = model.notes.clone();
+    // A subtree nothing measures (a gripper on an arm whose joints alone are logged) is held at
+    // 0 wherever the analysis needs its position; effort space carries it welded to its parent,
+    // so that the measured joints above it keep their inverse dynamics.
+    let observed_joints: Vec<usize> = observed.keys().copied().collect();
+    let unobserved_leaves = model.unobserved_subtrees(&observed_joints);
     for &j in &model.dofs() {
         if !observed.contains_key(&j) {
-            notes.push(format!("joint {} is not observed: held at 0", model.joints[j].name));
+            let welded = if unobserved_leaves.contains(&j) { ", welded to its parent (nothing below it is observed)" } else { "" };
+            notes.push(format!("joint {} is not observed: held at 0{welded}", model.joints[j].name));
         }
     }
     let gravity = DVec3::from_array(rec.gravity_mps2);
     let t_split = rec.time_s[0] + (1.0 - cfg.held_out_fraction) * (rec.time_s[n - 1] - rec.time_s[0]);
-    let effort_joints = effort_space_joints(model, rec, &observed);
+    let held_still = model.with_welded(&unobserved_leaves);
+    let effort_joints = effort_space_joints(&held_still, rec, &observed);
     let (mut outcomes, given) = if effort_joints.is_empty() {
         (Vec::new(), std::collections::BTreeMap::new())
     } else {
-        analyze_effort_space(model, rec, cfg, &observed, &effort_joints, gravity, t_split)?
+        analyze_effort_space(&held_still, rec, cfg, &observed, &effort_joints, gravity, t_split)?
     };
     let done: Vec<usize> = outcomes.iter().filter_map(|o| model.joint_index(&o.series.joint)).collect();
     let filled: Vec<Vec<f64>> =
@@ -178,7 +186,8 @@ fn assemble_report(cfg: &GapConfig, notes: Vec<String>, t_split: f64, outcomes: 
 }
 
 /// Joints analysed in effort space: every degree of freedom of the model observed (inverse
-/// dynamics needs the whole tree's motion) and every applied effort known — recorded, or zero
+/// dynamics needs the whole tree's motion; `model` has its unobserved subtrees welded) and every
+/// applied effort known — recorded, or zero
 /// where the recording has no effort column (spec §2: such a joint has zero applied effort, as a
 /// released door or a swinging pendulum has).
 fn effort_space_joints(model: &GapModel, _rec: &Recording, observed: &std::collections::BTreeMap<usize, Vec<f64>>) -> Vec<usize> {

@@ -405,6 +405,38 @@ impl GapModel {
         self.links.iter().position(|l| l.name == name)
     }
 
+    /// The movable joints none of whose descendants is in `observed` (model joint indices,
+    /// sorted): a subtree nothing measures, such as a gripper's fingers on an arm whose joints
+    /// alone are logged.
+    #[must_use]
+    pub fn unobserved_subtrees(&self, observed: &[usize]) -> Vec<usize> {
+        let mut seen_below = vec![false; self.joints.len()];
+        for &k in observed {
+            // Mark k and every joint above it.
+            let mut at = Some(k);
+            while let Some(j) = at {
+                if seen_below[j] {
+                    break;
+                }
+                seen_below[j] = true;
+                at = self.parent_joint[self.joints[j].parent];
+            }
+        }
+        self.dofs().into_iter().filter(|&j| !seen_below[j]).collect()
+    }
+
+    /// The model with `joints` welded at position 0 (their frame at q = 0, as the URDF places
+    /// the child): what an analysis that holds an unobserved joint at 0 sees. Joint indices
+    /// and names are unchanged; the parsed URDF is kept as read.
+    #[must_use]
+    pub fn with_welded(&self, joints: &[usize]) -> Self {
+        let mut welded = self.clone();
+        for &j in joints {
+            welded.joints[j].kind = DofKind::Fixed;
+        }
+        welded
+    }
+
     /// Movable joints (degrees of freedom), URDF order.
     #[must_use]
     pub fn dofs(&self) -> Vec<usize> {
