@@ -704,6 +704,33 @@ fn a_gripper_that_is_not_recorded_rides_welded_and_the_arm_keeps_effort_space() 
     assert!(report.notes.iter().any(|n| n.contains("finger_slide") && n.contains("welded")), "{:?}", report.notes);
 }
 
+/// Broke: a log written at 1 kHz that holds a 200 Hz signal between its updates (topics merged at
+/// different rates, a logger faster than its encoder) reads as a joint that stops and jumps every
+/// five samples; a 7-joint arm logged so was read as viscous damping where it has dry friction,
+/// Coulomb levels ×3 and `unknown`. The repeats are read as missing samples: the double pendulum
+/// released, logged that way, replays to the integration error and names nothing.
+#[test]
+fn a_log_that_holds_each_reading_for_five_rows_is_read_as_its_updates() {
+    let model = parse_model(DOUBLE_PENDULUM, Path::new("double_pendulum.urdf")).expect("model parses");
+    let csv = double_pendulum_csv(0.6, -0.4, 5.0, [0.0, 0.0]);
+    let mut held = String::from("time,shoulder.q,elbow.q\n");
+    for line in csv.lines().skip(1) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let t: f64 = cells[0].parse().expect("a time");
+        for k in 0..5 {
+            writeln!(held, "{:.4},{},{}", t + 0.001 * f64::from(k), cells[1], cells[2]).expect("writes to a string");
+        }
+    }
+    let rec = parse_recording(&held, Path::new("held.csv")).expect("parses");
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    assert!(report.effects.is_empty(), "nothing is missing: {:?}", report.effects);
+    for joint in ["shoulder", "elbow"] {
+        let fit = &report.fit.per_joint[joint];
+        assert!(fit.rmse_before < 0.02, "{joint}: the replay misses the recording by {} rad", fit.rmse_before);
+        assert!(report.notes.iter().any(|n| n.starts_with(&format!("{joint}.q:")) && n.contains("read as missing")), "{:?}", report.notes);
+    }
+}
+
 /// The real recordings of `../shared/data/recordings/` (made by others on real hardware), or
 /// None with a loud skip when the shared data are absent.
 fn shared_recording(case: &str, file: &str) -> Option<(GapModel, partscene::gap::Recording)> {

@@ -92,7 +92,7 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     if n < 20 {
         return Err(GapError::Analysis { file: rec.file.clone(), message: format!("{n} samples; at least 20 are needed") });
     }
-    let observed = observe::observed_positions(model, rec)?;
+    let observe::Observed { positions: observed, notes: stale_notes } = observe::observed_positions(model, rec)?;
     if observed.is_empty() {
         return Err(GapError::Analysis {
             file: rec.file.clone(),
@@ -100,6 +100,7 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
         });
     }
     let mut notes = model.notes.clone();
+    notes.extend(stale_notes);
     // A subtree nothing measures (a gripper on an arm whose joints alone are logged) is held at
     // 0 wherever the analysis needs its position; effort space carries it welded to its parent,
     // so that the measured joints above it keep their inverse dynamics.

@@ -10,10 +10,19 @@ use super::error::GapError;
 use super::model::{DofKind, GapModel, Iso};
 use super::recording::Recording;
 
-/// Measured positions of every observed movable joint (NaN where missing), by joint index.
-pub fn observed_positions(model: &GapModel, rec: &Recording) -> Result<BTreeMap<usize, Vec<f64>>, GapError> {
+/// What the recording measures of the joints.
+pub struct Observed {
+    /// Measured positions of every observed movable joint (NaN where missing), by joint index.
+    pub positions: BTreeMap<usize, Vec<f64>>,
+    /// What was read as missing though the recording holds a value ([`drop_stale_readings`]).
+    pub notes: Vec<String>,
+}
+
+/// The measured positions of the model's joints, from `q` columns and tracked poses.
+pub fn observed_positions(model: &GapModel, rec: &Recording) -> Result<Observed, GapError> {
     let n = rec.time_s.len();
     let mut observed: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+    let mut notes = Vec::new();
     let mut filled: Vec<Vec<f64>> = vec![vec![0.0; n]; model.joints.len()];
     for &j in &model.order {
         let joint = &model.joints[j];
@@ -21,6 +30,14 @@ pub fn observed_positions(model: &GapModel, rec: &Recording) -> Result<BTreeMap<
             continue;
         }
         let mut q = rec.joint_q.get(&joint.name).cloned().unwrap_or_else(|| vec![f64::NAN; n]);
+        let stale = drop_stale_readings(&mut q);
+        if stale > 0 {
+            notes.push(format!(
+                "{}.q: {stale} samples repeat the reading before them exactly while the joint moves on by three \
+                 steps of its resolution or more: read as missing (a log that holds a slower signal between its updates)",
+                joint.name
+            ));
+        }
         for (link_name, track) in &rec.links {
             let Some(link) = model.link_index(link_name) else { continue };
             let Some((moving, child_from_link)) = model.moving_joint_of(link) else { continue };
@@ -40,7 +57,48 @@ pub fn observed_positions(model: &GapModel, rec: &Recording) -> Result<BTreeMap<
             observed.insert(j, q);
         }
     }
-    Ok(observed)
+    Ok(Observed { positions: observed, notes })
+}
+
+/// Steps of a position's resolution (its smallest change between samples) beyond which the
+/// joint must move on after a run of exact repeats for the repeats to be stale: three steps or
+/// more (a quantised encoder leaving a turning point moves on by one or two; 2.5, not 2, so that
+/// two steps summed in floating point do not count as more than two).
+const STALE_JUMP_RESOLUTIONS: f64 = 2.5;
+
+/// Marks as missing (NaN) the readings of `q` that repeat the one before them exactly while the
+/// joint then moves on by three steps of its resolution or more ([`STALE_JUMP_RESOLUTIONS`]; the
+/// resolution: the smallest change between consecutive readings): a log written faster than the signal it holds (a 1 kHz
+/// log of a 200 Hz encoder, topics merged at different rates) repeats the last value until the
+/// next update, and that staircase would read as a joint that stops and jumps every few samples.
+/// A real encoder repeats too, at rest or moving slower than a step per sample, but then moves on
+/// by a step or two (a real double pendulum's 14-bit encoders, DFKI: none marked). The first reading of a run stays (it is the update). Returns how many were
+/// marked.
+fn drop_stale_readings(q: &mut [f64]) -> usize {
+    let finite: Vec<usize> = (0..q.len()).filter(|&i| q[i].is_finite()).collect();
+    let resolution = finite.windows(2).map(|w| (q[w[1]] - q[w[0]]).abs()).filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
+    if !resolution.is_finite() {
+        return 0;
+    }
+    let mut stale = Vec::new();
+    let mut k = 0;
+    while k < finite.len() {
+        // The run of readings equal to finite[k].
+        let mut end = k + 1;
+        // Exactly the same reading, bit for bit: a repeat, not a small change.
+        while end < finite.len() && q[finite[end]].to_bits() == q[finite[k]].to_bits() {
+            end += 1;
+        }
+        let moves_on = end < finite.len() && (q[finite[end]] - q[finite[k]]).abs() > STALE_JUMP_RESOLUTIONS * resolution;
+        if moves_on {
+            stale.extend(finite[k + 1..end].iter().copied());
+        }
+        k = end;
+    }
+    for &i in &stale {
+        q[i] = f64::NAN;
+    }
+    stale.len()
 }
 
 /// Joint positions implied by a tracked link's poses (NaN where the pose is missing).
@@ -161,4 +219,32 @@ pub fn smoothed_derivatives(time_s: &[f64], y: &[f64], half: usize) -> Vec<[f64;
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`drop_stale_readings`] on `q`: the indices it marks missing.
+    fn check(q: &[f64], expected: &[usize]) {
+        let mut v = q.to_vec();
+        let count = drop_stale_readings(&mut v);
+        let got: Vec<usize> = (0..v.len()).filter(|&i| v[i].is_nan() && q[i].is_finite()).collect();
+        assert_eq!((got.as_slice(), count), (expected, expected.len()), "{q:?}");
+    }
+
+    #[test]
+    fn a_log_that_holds_a_slower_signal_loses_its_repeats_and_an_encoder_keeps_its_own() {
+        // A slower signal logged three rows per update, speeding up and then turning round (the
+        // turn shows the resolution). A staircase at one constant speed could as well be an
+        // encoder of that step moving a step every three rows: it is not told apart.
+        check(&[0.0, 0.0, 0.0, 0.1, 0.1, 0.1, 0.4, 0.4, 0.4, 0.8, 0.82], &[1, 2, 4, 5, 7, 8]);
+        // A quantised encoder (step 0.5) at a turning point: repeats, then one or two steps on.
+        check(&[2.0, 2.5, 3.0, 3.0, 3.0, 3.5, 3.5, 3.0, 2.0], &[]);
+        // At rest to the end, and a dropout inside a run: nothing moves on, nothing is stale.
+        check(&[1.0, 1.0, f64::NAN, 1.0, 1.0], &[]);
+        // Across a dropout the run continues and is stale once the joint moves on.
+        check(&[0.0, 0.01, 0.01, f64::NAN, 0.01, 0.5], &[2, 4]);
+        check(&[], &[]);
+    }
 }
