@@ -731,6 +731,74 @@ fn a_log_that_holds_each_reading_for_five_rows_is_read_as_its_updates() {
     }
 }
 
+/// A door on a vertical hinge (no gravity along it), 0.35 kg·m² about its axis.
+const DOOR: &str = r#"<robot name="door"><link name="frame"/>
+  <link name="panel"><inertial><origin xyz="0.25 0 0"/><mass value="4"/>
+    <inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="hinge" type="revolute"><parent link="frame"/><child link="panel"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="100" velocity="10"/></joint>
+</robot>"#;
+
+/// [`DOOR`] with dry friction of `friction` N·m that holds it exactly (written out by hand, not
+/// the library's simulation): pushed 0.4 s at 1.5 N·m one way, then the other, then the first,
+/// each push left to coast to a stop, a hand's effort under the friction varying between the
+/// pushes (0.3 sin 4.1t N·m) and, from 4.2 s on, through the rest of the 8 s (0.4 sin 2.3t):
+/// the door rests there, held by its friction. Noise-free (its rests repeat exactly), 200 Hz.
+fn door_with_rests_csv(friction: f64) -> String {
+    let inertia = 0.35;
+    let effort = |t: f64| -> f64 {
+        match t {
+            t if t < 0.4 => 1.5,
+            t if (1.4..1.8).contains(&t) => -1.5,
+            t if (2.8..3.2).contains(&t) => 1.5,
+            t if t >= 4.2 => 0.4 * (2.3 * t).sin(),
+            t => 0.3 * (4.1 * t).sin(),
+        }
+    };
+    let (mut q, mut v) = (0.0_f64, 0.0_f64);
+    let mut csv = String::from("time,hinge.q,hinge.effort\n");
+    for i in 0..1600 {
+        let t = f64::from(i) / 200.0;
+        let u = effort(t + 1e-9);
+        writeln!(csv, "{t:.4},{q:.12},{u:.9}").expect("writes to a string");
+        for _ in 0..50 {
+            let h = 1e-4;
+            if v == 0.0 && u.abs() <= friction {
+                continue;
+            }
+            let resist = if v == 0.0 { friction * u.signum() } else { friction * v.signum() };
+            let next = v + h * (u - resist) / inertia;
+            // Friction stops it rather than turning it round.
+            v = if v != 0.0 && next.signum() != v.signum() { 0.0 } else { next };
+            q += h * v;
+        }
+    }
+    csv
+}
+
+/// Broke: a door that its dry friction holds most of the time (`JaxSim`'s recording of a door
+/// pushed toward random targets rests 66 % of the time and through the whole held-out part; DART
+/// on the same pushes alike) got viscous damping and `unknown`: dry friction was "better in only
+/// 62 % of the held-out blocks", the blocks where the door rests counting against it, though a
+/// law of the joint's speed can say nothing where it does not move. Such blocks no longer count
+/// for laws of the motion: here dry friction is better in every block where the door moves
+/// (before: 7 of 8 blocks, confidence 0.87). And its exact rests, which break away slowly, are
+/// readings, not a stale log's repeats (before the rule looked at the step after a jump, 124
+/// samples were read as missing).
+#[test]
+fn a_door_that_its_friction_holds_through_the_held_out_part_is_read_as_dry_friction() {
+    let model = parse_model(DOOR, Path::new("door.urdf")).expect("model parses");
+    let rec = parse_recording(&door_with_rests_csv(0.5), Path::new("door.csv")).expect("parses");
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    let found: Vec<String> =
+        report.effects.iter().map(|e| format!("{}:{} {:?} c={:.2}", e.joint, e.kind, e.params, e.confidence)).collect();
+    assert_eq!(report.effects.len(), 1, "{found:?}");
+    let dry = &report.effects[0];
+    assert!(dry.kind == "coulomb_friction" && (dry.params["friction"] - 0.5).abs() < 0.125, "{found:?}");
+    assert!(dry.confidence >= 0.95, "{found:?}");
+    assert!(!report.notes.iter().any(|n| n.contains("read as missing")), "its exact rests are readings: {:?}", report.notes);
+}
+
 /// The real recordings of `../shared/data/recordings/` (made by others on real hardware), or
 /// None with a loud skip when the shared data are absent.
 fn shared_recording(case: &str, file: &str) -> Option<(GapModel, partscene::gap::Recording)> {

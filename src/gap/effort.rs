@@ -308,6 +308,14 @@ enum Family {
     SoftClose,
 }
 
+impl Family {
+    /// Whether its effort follows the joint's own motion (speed or acceleration) and vanishes
+    /// where the joint rests: such a law says nothing where it does not move.
+    fn follows_motion(self) -> bool {
+        matches!(self, Self::Friction | Self::Viscous | Self::Inertia | Self::SoftClose)
+    }
+}
+
 /// A regressor column: its values on each effort row it touches (NaN = not used).
 #[derive(Debug, Clone)]
 struct Column {
@@ -431,7 +439,15 @@ pub struct EffortProblem<'a> {
     fold_of: Vec<usize>,
     weights: Vec<f64>,
     used: Vec<Vec<bool>>,
+    /// Per row and fold: whether the joint moves there ([`MOVING_FOLD_SHARE`]).
+    moving: Vec<Vec<bool>>,
 }
+
+/// Least RMS speed of a joint over a block's samples, as a share of its RMS speed over all of
+/// them, for the block to show a law of its motion (friction, damping, a rotor's inertia): a
+/// door that rests through a block, held by its friction or left alone, tells such a law nothing
+/// there, whatever the fit does with the noise.
+const MOVING_FOLD_SHARE: f64 = 0.1;
 
 /// The effort the model as written needs at every sample, per dof: inverse dynamics plus the
 /// URDF's own `<dynamics>`; and per body the effort of its inertia alone (mass regressors).
@@ -573,8 +589,10 @@ impl<'a> EffortProblem<'a> {
             fold_of: Vec::new(),
             weights: Vec::new(),
             used,
+            moving: Vec::new(),
         };
         problem.fold_of = problem.assign_folds(sig);
+        problem.moving = problem.moving_folds(sig);
         problem.build_candidates(sig, &me, &part_of, gravity.normalize_or_zero());
         problem.weights = problem.rows.iter().map(|r| 1.0 / robust_scale(&r.residual).max(1e-9).powi(2)).collect();
         problem.build_grams();
@@ -585,6 +603,30 @@ impl<'a> EffortProblem<'a> {
     #[must_use]
     pub fn rows(&self) -> &[RowInfo] {
         &self.rows
+    }
+
+    /// Per row and fold: whether the joint's RMS speed over the block's used samples reaches
+    /// [`MOVING_FOLD_SHARE`] of its RMS speed over all of them.
+    fn moving_folds(&self, sig: &Signals) -> Vec<Vec<bool>> {
+        let k = self.rules.folds.max(2);
+        self.rows
+            .iter()
+            .zip(&self.used)
+            .map(|(row, used)| {
+                let mut sum = vec![(0.0, 0usize); k];
+                for i in (0..used.len()).filter(|&i| used[i]) {
+                    let v = sig.q[row.dof][i][1];
+                    if v.is_finite() {
+                        let f = &mut sum[self.fold_of[i]];
+                        f.0 += v * v;
+                        f.1 += 1;
+                    }
+                }
+                let (all, count) = sum.iter().fold((0.0, 0usize), |(a, n), &(s, c)| (a + s, n + c));
+                let rms_all = (all / count.max(1) as f64).sqrt();
+                sum.iter().map(|&(s, c)| c > 0 && (s / c as f64).sqrt() >= MOVING_FOLD_SHARE * rms_all).collect()
+            })
+            .collect()
     }
 
     /// Contiguous blocks of equal duration over the used samples.
@@ -983,9 +1025,12 @@ impl EffortProblem<'_> {
         let sum = |e: &Evaluation| rows.iter().map(|&r| e.row_sse(r)).sum::<f64>();
         let (b, a) = (sum(before), sum(after));
         // Folds where these rows have held-out samples (a drawer resting on its stop for a whole
-        // block says nothing about it).
-        let informative: Vec<usize> =
-            (0..k).filter(|&f| rows.iter().map(|&r| self.grams[r].folds[f].3).sum::<usize>() >= MIN_FOLD_SAMPLES).collect();
+        // block says nothing about it), and for a law of the joint's motion, where it moves.
+        let follows_motion = self.candidates[c].family.follows_motion();
+        let informative: Vec<usize> = (0..k)
+            .filter(|&f| rows.iter().map(|&r| self.grams[r].folds[f].3).sum::<usize>() >= MIN_FOLD_SAMPLES)
+            .filter(|&f| !follows_motion || rows.iter().any(|&r| self.moving[r][f]))
+            .collect();
         let better = informative
             .iter()
             .filter(|&&f| {

@@ -68,7 +68,8 @@ const STALE_JUMP_RESOLUTIONS: f64 = 2.5;
 
 /// Marks as missing (NaN) the readings of `q` that repeat the one before them exactly while the
 /// joint then moves on by three steps of its resolution or more ([`STALE_JUMP_RESOLUTIONS`]; the
-/// resolution: the smallest change between consecutive readings): a log written faster than the signal it holds (a 1 kHz
+/// resolution: the smallest change between consecutive readings) and by more than twice what it
+/// moves next: a log written faster than the signal it holds (a 1 kHz
 /// log of a 200 Hz encoder, topics merged at different rates) repeats the last value until the
 /// next update, and that staircase would read as a joint that stops and jumps every few samples.
 /// A real encoder repeats too, at rest or moving slower than a step per sample, but then moves on
@@ -89,8 +90,19 @@ fn drop_stale_readings(q: &mut [f64]) -> usize {
         while end < finite.len() && q[finite[end]].to_bits() == q[finite[k]].to_bits() {
             end += 1;
         }
-        let moves_on = end < finite.len() && (q[finite[end]] - q[finite[k]]).abs() > STALE_JUMP_RESOLUTIONS * resolution;
-        if moves_on {
+        // The jump after the run, and the change after that (none at the end of the record).
+        let jump = finite.get(end).map(|&i| (q[i] - q[finite[k]]).abs());
+        let after = finite.get(end + 1).map(|&i| (q[i] - q[finite[end]]).abs());
+        // Stale where the jump carries the motion held back through the run: beyond the
+        // resolution, and more than twice the change that follows (another run, or the joint
+        // moving on at its speed). A joint that breaks away from rest moves off slowly and
+        // speeds up (stuck by friction in a noise-free recording, where its rests repeat
+        // exactly): its first step is the smaller.
+        let stale_run = match (jump, after) {
+            (Some(jump), Some(after)) => jump > STALE_JUMP_RESOLUTIONS * resolution && after <= 0.5 * jump,
+            _ => false,
+        };
+        if stale_run {
             stale.extend(finite[k + 1..end].iter().copied());
         }
         k = end;
@@ -241,10 +253,13 @@ mod tests {
         check(&[0.0, 0.0, 0.0, 0.1, 0.1, 0.1, 0.4, 0.4, 0.4, 0.8, 0.82], &[1, 2, 4, 5, 7, 8]);
         // A quantised encoder (step 0.5) at a turning point: repeats, then one or two steps on.
         check(&[2.0, 2.5, 3.0, 3.0, 3.0, 3.5, 3.5, 3.0, 2.0], &[]);
+        // A joint held by its friction, noise-free, breaking away: its first step is the smallest
+        // of its departure, whatever the resolution elsewhere (here a turn of 0.0001).
+        check(&[0.5, 0.5001, 0.5001, 0.5001, 0.5, 0.5, 0.5, 0.502, 0.508, 0.518], &[]);
         // At rest to the end, and a dropout inside a run: nothing moves on, nothing is stale.
         check(&[1.0, 1.0, f64::NAN, 1.0, 1.0], &[]);
         // Across a dropout the run continues and is stale once the joint moves on.
-        check(&[0.0, 0.01, 0.01, f64::NAN, 0.01, 0.5], &[2, 4]);
+        check(&[0.0, 0.01, 0.01, f64::NAN, 0.01, 0.5, 0.5], &[2, 4]);
         check(&[], &[]);
     }
 }
