@@ -117,7 +117,7 @@ pub(super) fn bounce_note(restitution: f64) -> Option<String> {
 
 /// Restitutions of the model's own limits tried ([`replay_with_bounce`]): from dead to a
 /// penalty-spring limit that throws the joint back at 0.9 of its speed (Newton's default) and an
-/// undamped one that throws it back at its full speed (JaxSim's limit spring).
+/// undamped one that throws it back at its full speed (`JaxSim`'s limit spring).
 const LIMIT_RESTITUTIONS: [f64; 12] = [0.0, 0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.75, 0.9, 1.0];
 
 /// Noise σs within which a measured position counts as at a limit.
