@@ -803,6 +803,32 @@ fn a_door_that_its_friction_holds_through_the_held_out_part_is_read_as_dry_frict
     assert!(!report.notes.iter().any(|n| n.contains("read as missing")), "its exact rests are readings: {:?}", report.notes);
 }
 
+/// A recording whose efforts are of the opposite sign to the model's convention (a driver that
+/// reports the load's torque on the motor, say) was read as a spring of 63 N·m/rad and `unknown`
+/// on a Panda's joint, with nothing to say why. The report now asks about the sign, and only
+/// there: the same door with its efforts as recorded is not asked.
+#[test]
+fn efforts_of_the_opposite_sign_are_questioned_in_the_report() {
+    let model = parse_model(DOOR, Path::new("door.urdf")).expect("model parses");
+    let csv = door_with_rests_csv(0.5);
+    let mut flipped = String::new();
+    for (i, line) in csv.lines().enumerate() {
+        if i == 0 {
+            writeln!(flipped, "{line}").expect("writes to a string");
+            continue;
+        }
+        let (head, effort) = line.rsplit_once(',').expect("three cells");
+        let value: f64 = effort.parse().expect("a number");
+        writeln!(flipped, "{head},{}", -value).expect("writes to a string");
+    }
+    for (text, asked) in [(csv.as_str(), false), (flipped.as_str(), true)] {
+        let rec = parse_recording(text, Path::new("door.csv")).expect("parses");
+        let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+        let why = &report.joints["hinge"].why;
+        assert_eq!(why.contains("runs against the effort the model needs"), asked, "{why}");
+    }
+}
+
 /// The real recordings of `../shared/data/recordings/` (made by others on real hardware), or
 /// None with a loud skip when the shared data are absent.
 fn shared_recording(case: &str, file: &str) -> Option<(GapModel, partscene::gap::Recording)> {

@@ -350,6 +350,33 @@ pub struct RowInfo {
     /// RMS of the effort the model needs to hold the tree still against gravity at the joint
     /// ([`SelectionRules::min_static_load_share`]).
     pub gravity_rms: f64,
+    /// Correlation of the recorded effort with the effort the model needs, over the used
+    /// samples (near 1 where the model holds; strongly negative where the recording's sign
+    /// convention is the opposite of the model's: [`EFFORT_AGAINST_MODEL`]).
+    pub model_correlation: f64,
+}
+
+/// A correlation of the recorded effort with the effort the model needs below this says the two
+/// run against each other: the report asks whether the recording's sign convention (positive
+/// along the joint's axis, spec §2) is the model's. Physics missing from a model may weaken the
+/// correlation, not turn it round.
+pub const EFFORT_AGAINST_MODEL: f64 = -0.5;
+
+/// Pearson correlation of the pairs (0 with fewer than two or no spread).
+fn correlation(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
+    let v: Vec<(f64, f64)> = pairs.filter(|(a, b)| a.is_finite() && b.is_finite()).collect();
+    if v.len() < 2 {
+        return 0.0;
+    }
+    let n = v.len() as f64;
+    let (ma, mb) = (v.iter().map(|p| p.0).sum::<f64>() / n, v.iter().map(|p| p.1).sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (a, b) in &v {
+        sab += (a - ma) * (b - mb);
+        saa += (a - ma).powi(2);
+        sbb += (b - mb).powi(2);
+    }
+    if saa > 0.0 && sbb > 0.0 { sab / (saa * sbb).sqrt() } else { 0.0 }
 }
 
 /// What effort-space identification found for one joint.
@@ -374,6 +401,8 @@ pub struct JointFinding {
     pub effort_rms: f64,
     /// The model's RMS gravity effort at the joint.
     pub gravity_rms: f64,
+    /// [`RowInfo::model_correlation`].
+    pub model_correlation: f64,
     /// Residual effort before and after, per sample (NaN where not used).
     pub residual_before: Vec<f64>,
     /// After.
@@ -573,7 +602,8 @@ impl<'a> EffortProblem<'a> {
             let scale =
                 rms_of(&|i| applied.as_ref().map_or(0.0, |e| e[i]) - z.gravity[d][i]).max(rms_of(&|i| z.tau[d][i] - z.gravity[d][i]));
             let gravity_rms = rms_of(&|i| z.gravity[d][i]);
-            rows.push(RowInfo { joint: j, dof: d, residual, effort_rms: scale, gravity_rms });
+            let model_correlation = correlation((0..n).filter(|&i| ok[i]).map(|i| (measured[i], me.filtered.tau[d][i])));
+            rows.push(RowInfo { joint: j, dof: d, residual, effort_rms: scale, gravity_rms, model_correlation });
             used.push(ok);
         }
         if used.iter().all(|u| u.iter().filter(|&&x| x).count() < 50) {
@@ -1454,6 +1484,7 @@ impl EffortProblem<'_> {
                     cv_rms_after: to_rms(fitted.row_sse(r)),
                     effort_rms: info.effort_rms,
                     gravity_rms: info.gravity_rms,
+                    model_correlation: info.model_correlation,
                     residual_before: info.residual.clone(),
                     residual_after: self.residual_after(r, &chosen, &fitted.theta),
                     rejected: Vec::new(),
@@ -1663,6 +1694,7 @@ mod tests {
             cv_rms_after: 1.0,
             effort_rms: 5.0,
             gravity_rms: 0.0,
+            model_correlation: 1.0,
             residual_before: residual.to_vec(),
             residual_after: residual.to_vec(),
             rejected: Vec::new(),

@@ -636,12 +636,25 @@ fn joint_outcome(
             1000.0 * band.sigma_s,
             super::smooth::GAUSS_HALF_GAIN_F_SIGMA / band.sigma_s,
             band.motion_hz
-        ),
+        ) + &sign_question(f.model_correlation),
         effort_rms: Some(f.effort_rms),
         effort_residual: Some(RmsePair { rmse_before: f.cv_rms_before, rmse_after: f.cv_rms_after }),
         rejected: f.rejected.clone(),
     };
     JointOutcome { mismatches, effects, all, held, sq, series, analysis }
+}
+
+/// What the report asks where the recorded effort runs against the effort the model needs
+/// ([`super::effort::EFFORT_AGAINST_MODEL`]); empty otherwise.
+fn sign_question(model_correlation: f64) -> String {
+    if model_correlation < super::effort::EFFORT_AGAINST_MODEL {
+        format!(
+            "; the recorded effort runs against the effort the model needs (correlation {model_correlation:.2}): is its sign \
+             the model's, positive along the joint's axis? What is named here stands on that sign"
+        )
+    } else {
+        String::new()
+    }
 }
 
 fn effort_mismatch(
