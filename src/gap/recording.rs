@@ -208,7 +208,9 @@ pub fn parse_recording(text: &str, file: &Path) -> Result<Recording, GapError> {
             } else {
                 match cell.parse::<f64>() {
                     Ok(v) if v.is_finite() => v,
-                    _ => return Err(csv_error(file, *line_no, c + 1, name, "a finite number or an empty cell", cell)),
+                    // `nan` (numpy's `savetxt`, many loggers) is a missing sample, as an empty cell is.
+                    Ok(v) if v.is_nan() && *channel != Channel::Time => f64::NAN,
+                    _ => return Err(csv_error(file, *line_no, c + 1, name, "a finite number, `nan` or an empty cell", cell)),
                 }
             };
             if *channel == Channel::Time
@@ -342,6 +344,17 @@ mod tests {
         assert!(matches!(e, GapError::Csv { line: 1, column: 2, .. }), "{e}");
         let e = parse_recording("time,arm.q,arm.velocity\n0,0.1,fast\n", Path::new("log.csv")).expect_err("not a number");
         assert!(matches!(e, GapError::Csv { line: 2, column: 3, .. }), "{e}");
+    }
+
+    #[test]
+    fn nan_written_by_a_logger_is_a_missing_sample_but_not_in_time_and_inf_is_refused() {
+        let r = parse_recording("time,arm.q,arm.effort\n0,0.1,NaN\n0.01,nan,1\n", Path::new("log.csv")).expect("parses");
+        assert!(r.joint_q["arm"][1].is_nan());
+        assert_eq!(r.joint_effort["arm"], vec![0.0, 1.0], "a missing effort holds the one before (none yet: 0)");
+        let e = parse_recording("time,arm.q\nnan,0.1\n", Path::new("log.csv")).expect_err("time must be a number");
+        assert!(matches!(e, GapError::Csv { line: 2, column: 1, .. }), "{e}");
+        let e = parse_recording("time,arm.q\n0,inf\n", Path::new("log.csv")).expect_err("not finite");
+        assert!(matches!(e, GapError::Csv { line: 2, column: 2, .. }), "{e}");
     }
 
     #[test]
