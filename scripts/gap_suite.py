@@ -805,6 +805,25 @@ def bullet_cases():
 # The cases that several engine suites (gap_suite_physx.py, gap_suite_dart.py, gap_suite_drake.py,
 # gap_suite_newton.py) record alike: key -> Case of (name, engine); engine_case names and makes them.
 ENGINE_CASES = {
+    "door_friction": lambda name, engine: Case(
+        name, engine, wardrobe_door(), "heavy wardrobe door pushed and released; dry hinge friction",
+        [fx("hinge", "coulomb_friction", friction=1.0)], push(["hinge"], [5.0]), {"hinge": 0.4},
+        effort_noise=0.01),
+    "drawer_friction": lambda name, engine: Case(
+        name, engine, drawer(0.5, 0.55, 0.2, 6.0, 0.45), "loaded drawer pushed and released; dry runners",
+        [fx("slide", "coulomb_friction", friction=6.0)], push(["slide"], [30.0]), {"slide": 0.1}, rate=250),
+    "door_friction_damping": lambda name, engine: Case(
+        name, engine, cabinet_door(), "cabinet door, pushed: dry friction and viscous damping",
+        [fx("hinge", "coulomb_friction", friction=0.2), fx("hinge", "viscous_damping", damping=0.15)],
+        push(["hinge"], [1.5]), {"hinge": 0.3}),
+    "lid_mass_friction": lambda name, engine: Case(
+        name, engine, chest_lid(), "lid pushed open and let fall: heavier than modelled, dry hinge",
+        [fx("lid_hinge", "mass_scale", scale=1.3), fx("lid_hinge", "coulomb_friction", friction=0.6)],
+        push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6}),
+    "double_pendulum_elbow_friction": lambda name, engine: Case(
+        name, engine, double_pendulum(0.3, 0.6, 0.25, 0.4),
+        "double pendulum released from an angle; dry friction at the elbow only",
+        [fx("elbow", "coulomb_friction", friction=0.05)], None, {"shoulder": 1.2, "elbow": -0.8}, rate=250),
     "door_damping": lambda name, engine: Case(
         name, engine, cabinet_door(), "cabinet door pushed and released; the hinge is viscously damped",
         [fx("hinge", "viscous_damping", damping=0.25)], push(["hinge"], [1.5]), {"hinge": 0.3}),

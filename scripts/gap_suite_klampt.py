@@ -113,8 +113,7 @@ import mujoco
 import numpy as np
 
 import gap_suite as gs
-from gap_suite import (DT, GRAVITY, Case, SuiteError, cabinet_door, chest_lid, door, double_pendulum, drawer, fx,
-                       joint_params, push, urdf_text, wardrobe_door)
+from gap_suite import DT, GRAVITY, SuiteError, door, fx, joint_params, urdf_text
 
 ENGINE = f"klampt {klampt.__version__}"
 KLAMPT_RTOL = 1e-9  # inertia and bias against MuJoCo, relative to the largest entry (all compute in double)
@@ -456,28 +455,15 @@ gs.measure_restitution = measure_restitution
 def cases():
     shared = functools.partial(gs.engine_case, "klampt", "klampt")  # gap_suite.ENGINE_CASES, named klampt_<key>
     return [
-        Case("klampt_door_friction", "klampt", wardrobe_door(),
-             "heavy wardrobe door pushed and released; dry hinge friction",
-             [fx("hinge", "coulomb_friction", friction=1.0)], push(["hinge"], [5.0]), {"hinge": 0.4},
-             effort_noise=0.01),
-        Case("klampt_drawer_friction", "klampt", drawer(0.5, 0.55, 0.2, 6.0, 0.45),
-             "loaded drawer pushed and released; dry runners",
-             [fx("slide", "coulomb_friction", friction=6.0)], push(["slide"], [30.0]), {"slide": 0.1}, rate=250),
+        shared("door_friction"),
+        shared("drawer_friction"),
         shared("door_damping"),
         shared("sash_mass_scale"),
         shared("drawer_end_stop"),
-        Case("klampt_door_friction_damping", "klampt", cabinet_door(),
-             "cabinet door, pushed: dry friction and viscous damping",
-             [fx("hinge", "coulomb_friction", friction=0.2), fx("hinge", "viscous_damping", damping=0.15)],
-             push(["hinge"], [1.5]), {"hinge": 0.3}),
+        shared("door_friction_damping"),
         shared("lid_mass_damping"),
-        Case("klampt_lid_mass_friction", "klampt", chest_lid(),
-             "lid pushed open and let fall: heavier than modelled, dry hinge",
-             [fx("lid_hinge", "mass_scale", scale=1.3), fx("lid_hinge", "coulomb_friction", friction=0.6)],
-             push(["lid_hinge"], [4.5]), {"lid_hinge": 0.6}),
-        Case("klampt_double_pendulum_elbow_friction", "klampt", double_pendulum(0.3, 0.6, 0.25, 0.4),
-             "double pendulum released from an angle; dry friction at the elbow only",
-             [fx("elbow", "coulomb_friction", friction=0.05)], None, {"shoulder": 1.2, "elbow": -0.8}, rate=250),
+        shared("lid_mass_friction"),
+        shared("double_pendulum_elbow_friction"),
         shared("double_pendulum_elbow_damping"),
         shared("drawer_small_damping"),
         shared("none_door_pushes"),
