@@ -514,7 +514,7 @@ fn rapier_recording(dynamics: RapierDynamics, seed: u64) -> String {
     for (e, &t) in effort.iter_mut().zip(&time) {
         if t >= t_next {
             pushing = !pushing;
-            value = if pushing { rng.random_range(-1.2..1.2) } else { 0.0 };
+            value = if pushing { rng.random_range(-0.6..0.6) } else { 0.0 };
             t_next = t + if pushing { rng.random_range(0.3..0.6) } else { rng.random_range(0.6..1.2) };
         }
         *e = value;
@@ -531,10 +531,11 @@ fn rapier_recording(dynamics: RapierDynamics, seed: u64) -> String {
     csv
 }
 
-/// The pushes reach ±1.2 N·m: with ±0.6 the door swung within 0.94 rad of its 0.6 rad rest,
-/// where a spring and a tilted axis (a sine) differ by under 6 %, and effort space, which this
-/// recording reaches since the unobserved lid is welded where it stands, read the pull as a 4°
-/// tilt by a hair (the test had passed in position space, where the lid forced it).
+/// Broke: the door swings within 0.94 rad of its 0.6 rad rest, where a spring and a tilted axis (a
+/// sine) differ by under 6 %; effort space, which this recording reaches since the unobserved lid
+/// is welded where it stands, took the tilt first and then the damper, though the spring in the
+/// tilt's place beside the damper leaves 16 % less held-out error (the test had passed in
+/// position space, where the lid forced it). The better pull now replaces the one chosen first.
 #[cfg(feature = "sim")]
 #[test]
 fn recordings_generated_by_rapier3d() {
