@@ -1306,7 +1306,11 @@ impl EffortProblem<'_> {
         for c in pulls {
             let (row, kind) = (self.candidates[c].row, self.candidates[c].kind);
             let other = if kind == EffectKind::Spring { EffectKind::GravityTilt } else { EffectKind::Spring };
-            if !chosen.contains(&c) || chosen.iter().any(|&x| self.candidates[x].row == row && self.candidates[x].kind == other) {
+            // Not where the row holds the other already, or a constant the spring would take in
+            // (an offset that another reading put there).
+            let family = |k: EffectKind| if k == EffectKind::Spring { Family::Constant } else { Family::Tilt };
+            let taken = chosen.iter().any(|&x| x != c && self.candidates[x].row == row && self.candidates[x].family == family(other));
+            if !chosen.contains(&c) || taken {
                 continue;
             }
             let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
@@ -1343,7 +1347,9 @@ impl EffortProblem<'_> {
     /// held-out error on the rows of both, when c is physical and the rise is within
     /// [`LOOK_ALIKE_SSE_SHARE`].
     fn as_good_in_place(&self, chosen: &[usize], fitted: &Evaluation, c: usize, twin: usize) -> Option<(Vec<usize>, Evaluation, f64)> {
-        let swapped: Vec<usize> = chosen.iter().copied().filter(|&x| x != twin).chain([c]).collect();
+        let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != twin).collect();
+        // In place of its family's member too: a spring takes the constant of an offset in.
+        let swapped = self.with(&rest, c);
         let e = self.evaluate(&swapped);
         let mut rows = self.rows_of(c);
         rows.extend(self.rows_of(twin));

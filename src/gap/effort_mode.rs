@@ -62,7 +62,7 @@ fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows:
 
 /// Per sample, how close to a stop it lets the joint have come unseen: at a turning point (a
 /// sample beyond neither finite neighbour towards `side`, -1 for a lower stop and +1 for an upper
-/// one), the larger of its distances to those neighbours; 0 elsewhere. A joint that bounces off
+/// one), the shorter of its distances to those neighbours (a bounce moves on both sides); 0 elsewhere. A joint that bounces off
 /// its stop between two samples (ODE's stops, a real lid dropped shut) turns round short of it
 /// in the record, its impact never seen within the contact band, yet the impulse lands in the
 /// smoothed acceleration.
@@ -71,8 +71,10 @@ fn unseen_approach(y: &[f64], side: f64) -> Vec<f64> {
     let mut reach = vec![0.0; y.len()];
     for w in finite.windows(3) {
         let (a, i, b) = (y[w[0]], y[w[1]], y[w[2]]);
+        // A bounce moves on both sides of its turn (a joint leaving a rest is no turn): the
+        // shorter of its two steps.
         if side * (i - a) >= 0.0 && side * (i - b) >= 0.0 {
-            reach[w[1]] = (i - a).abs().max((i - b).abs());
+            reach[w[1]] = (i - a).abs().min((i - b).abs());
         }
     }
     reach
@@ -636,7 +638,7 @@ fn joint_outcome(
             1000.0 * band.sigma_s,
             super::smooth::GAUSS_HALF_GAIN_F_SIGMA / band.sigma_s,
             band.motion_hz
-        ) + &sign_question(f.model_correlation),
+        ) + &sign_question(f.model_correlation, unexplained(rules, f)),
         effort_rms: Some(f.effort_rms),
         effort_residual: Some(RmsePair { rmse_before: f.cv_rms_before, rmse_after: f.cv_rms_after }),
         rejected: f.rejected.clone(),
@@ -645,9 +647,11 @@ fn joint_outcome(
 }
 
 /// What the report asks where the recorded effort runs against the effort the model needs
-/// ([`super::effort::EFFORT_AGAINST_MODEL`]); empty otherwise.
-fn sign_question(model_correlation: f64) -> String {
-    if model_correlation < super::effort::EFFORT_AGAINST_MODEL {
+/// ([`super::effort::EFFORT_AGAINST_MODEL`]) and what is named leaves it `unexplained`; empty
+/// otherwise. A missing spring stiffer than the swing's inertia turns the correlation round too
+/// (q̈ ≈ −ω²q), but then it is named and explains the efforts.
+fn sign_question(model_correlation: f64, unexplained: bool) -> String {
+    if unexplained && model_correlation < super::effort::EFFORT_AGAINST_MODEL {
         format!(
             "; the recorded effort runs against the effort the model needs (correlation {model_correlation:.2}): is its sign \
              the model's, positive along the joint's axis? What is named here stands on that sign"
@@ -739,9 +743,11 @@ mod tests {
         // between two samples at 200 Hz; the lowest sample, 0.0115 rad above the stop, lay
         // outside the contact band, the impulse landed in the smoothed acceleration and a
         // recording with nothing missing got an `unknown` of 2.6 N·m.
-        check_approach(&[0.3, 0.1, 0.0115, 0.05, 0.2], -1.0, &[(2, 0.0885)]);
+        check_approach(&[0.3, 0.1, 0.0115, 0.05, 0.2], -1.0, &[(2, 0.0385)]);
         // Towards an upper stop, and across a missing sample.
-        check_approach(&[1.5, 1.8, f64::NAN, 1.88, 1.7], 1.0, &[(3, 0.18)]);
+        check_approach(&[1.5, 1.8, f64::NAN, 1.88, 1.7], 1.0, &[(3, 0.08)]);
+        // Leaving a rest fast is no turn.
+        check_approach(&[0.2, 0.0, 0.0, 0.3], -1.0, &[]);
         // Moving on past a point, or turning away from the stop side, is no approach.
         check_approach(&[0.3, 0.2, 0.1, 0.0], -1.0, &[]);
         check_approach(&[0.1, 0.3, 0.1], -1.0, &[]);

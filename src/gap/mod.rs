@@ -126,7 +126,7 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
         (0..model.joints.len()).map(|j| observed.get(&j).map_or_else(|| vec![0.0; n], |q| observe::fill_gaps(q))).collect();
     let coupling = coupling_efforts(model, rec, &observed, gravity);
     let jobs: Vec<(usize, &Vec<f64>)> = observed.iter().filter(|(j, _)| !done.contains(j)).map(|(j, q)| (*j, q)).collect();
-    let why = position_space_reason(model, rec, &observed);
+    let why = position_space_reason(&held_still, rec, &observed);
     outcomes.extend(
         jobs.par_iter()
             .map(|&(j, y)| {

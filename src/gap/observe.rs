@@ -66,10 +66,16 @@ pub fn observed_positions(model: &GapModel, rec: &Recording) -> Result<Observed,
 /// two steps summed in floating point do not count as more than two).
 const STALE_JUMP_RESOLUTIONS: f64 = 2.5;
 
+/// Share of a position's magnitude within which two readings differ only by rounding (doubles
+/// carry 16 digits; no encoder resolves 12).
+const ROUNDING_SHARE: f64 = 1e-12;
+
 /// Marks as missing (NaN) the readings of `q` that repeat the one before them exactly while the
 /// joint then moves on by three steps of its resolution or more ([`STALE_JUMP_RESOLUTIONS`]; the
-/// resolution: the smallest change between consecutive readings) and by more than twice what it
-/// moves next: a log written faster than the signal it holds (a 1 kHz
+/// resolution: the smallest change between consecutive readings beyond rounding,
+/// [`ROUNDING_SHARE`]) and by more
+/// than twice what it moves next, the run, its jump and the next reading all consecutive rows (a
+/// gap of missing rows says nothing of when the joint moved): a log written faster than the signal it holds (a 1 kHz
 /// log of a 200 Hz encoder, topics merged at different rates) repeats the last value until the
 /// next update, and that staircase would read as a joint that stops and jumps every few samples.
 /// A real encoder repeats too, at rest or moving slower than a step per sample, but then moves on
@@ -77,7 +83,11 @@ const STALE_JUMP_RESOLUTIONS: f64 = 2.5;
 /// marked.
 fn drop_stale_readings(q: &mut [f64]) -> usize {
     let finite: Vec<usize> = (0..q.len()).filter(|&i| q[i].is_finite()).collect();
-    let resolution = finite.windows(2).map(|w| (q[w[1]] - q[w[0]]).abs()).filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
+    // Changes within rounding of the last digits (a CSV round trip) are no steps: one of them
+    // would make every encoder step a jump.
+    let scale = finite.iter().map(|&i| q[i].abs()).fold(1.0, f64::max);
+    let resolution =
+        finite.windows(2).map(|w| (q[w[1]] - q[w[0]]).abs()).filter(|&d| d > ROUNDING_SHARE * scale).fold(f64::INFINITY, f64::min);
     if !resolution.is_finite() {
         return 0;
     }
@@ -86,8 +96,9 @@ fn drop_stale_readings(q: &mut [f64]) -> usize {
     while k < finite.len() {
         // The run of readings equal to finite[k].
         let mut end = k + 1;
-        // Exactly the same reading, bit for bit: a repeat, not a small change.
-        while end < finite.len() && q[finite[end]].to_bits() == q[finite[k]].to_bits() {
+        // Exactly the same reading: a repeat, not a small change (both finite).
+        #[allow(clippy::float_cmp)]
+        while end < finite.len() && finite[end] == finite[end - 1] + 1 && q[finite[end]] == q[finite[k]] {
             end += 1;
         }
         // The jump after the run, and the change after that (none at the end of the record).
@@ -98,8 +109,9 @@ fn drop_stale_readings(q: &mut [f64]) -> usize {
         // moving on at its speed). A joint that breaks away from rest moves off slowly and
         // speeds up (stuck by friction in a noise-free recording, where its rests repeat
         // exactly): its first step is the smaller.
+        let consecutive = finite.get(end + 1).is_some_and(|&i| i == finite[end] + 1 && finite[end] == finite[end - 1] + 1);
         let stale_run = match (jump, after) {
-            (Some(jump), Some(after)) => jump > STALE_JUMP_RESOLUTIONS * resolution && after <= 0.5 * jump,
+            (Some(jump), Some(after)) => consecutive && jump > STALE_JUMP_RESOLUTIONS * resolution && after <= 0.5 * jump,
             _ => false,
         };
         if stale_run {
@@ -258,8 +270,12 @@ mod tests {
         check(&[0.5, 0.5001, 0.5001, 0.5001, 0.5, 0.5, 0.5, 0.502, 0.508, 0.518], &[]);
         // At rest to the end, and a dropout inside a run: nothing moves on, nothing is stale.
         check(&[1.0, 1.0, f64::NAN, 1.0, 1.0], &[]);
-        // Across a dropout the run continues and is stale once the joint moves on.
-        check(&[0.0, 0.01, 0.01, f64::NAN, 0.01, 0.5, 0.5], &[2, 4]);
+        // A run ends at a dropout: the joint may have moved during it, nothing is stale.
+        check(&[0.0, 0.01, 0.01, f64::NAN, 0.5, 0.5, 0.9], &[]);
+        // A rounding of the last digit does not make every encoder step a jump.
+        let mut steps = vec![2.0, 2.0 + 1e-15];
+        steps.extend((0..60).map(|i| 2.5 + 0.5 * f64::from(i / 3)));
+        check(&steps, &[]);
         check(&[], &[]);
     }
 }
