@@ -357,9 +357,9 @@ pub struct RowInfo {
 }
 
 /// A correlation of the recorded effort with the effort the model needs below this says the two
-/// run against each other: the report asks whether the recording's sign convention (positive
-/// along the joint's axis, spec §2) is the model's. Physics missing from a model may weaken the
-/// correlation, not turn it round.
+/// run against each other: where the named terms leave the effort unexplained, the report asks
+/// whether the recording's sign convention (positive along the joint's axis, spec §2) is the
+/// model's. A missing stiff spring turns the correlation round too, but is named and explains it.
 pub const EFFORT_AGAINST_MODEL: f64 = -0.5;
 
 /// Pearson correlation of the pairs (0 with fewer than two or no spread).
@@ -1306,10 +1306,12 @@ impl EffortProblem<'_> {
         for c in pulls {
             let (row, kind) = (self.candidates[c].row, self.candidates[c].kind);
             let other = if kind == EffectKind::Spring { EffectKind::GravityTilt } else { EffectKind::Spring };
-            // Not where the row holds the other already, or a constant the spring would take in
-            // (an offset that another reading put there).
-            let family = |k: EffectKind| if k == EffectKind::Spring { Family::Constant } else { Family::Tilt };
-            let taken = chosen.iter().any(|&x| x != c && self.candidates[x].row == row && self.candidates[x].family == family(other));
+            // Not where the row holds a member of the other's family already: the other itself, or
+            // a constant the spring would take in (an offset that another reading put there).
+            let Some(other_family) = self.candidates.iter().find(|x| x.row == row && x.kind == other).map(|x| x.family) else {
+                continue;
+            };
+            let taken = chosen.iter().any(|&x| x != c && self.candidates[x].row == row && self.candidates[x].family == other_family);
             if !chosen.contains(&c) || taken {
                 continue;
             }

@@ -62,10 +62,10 @@ fn contact_masks(model: &GapModel, time_s: &[f64], positions: &[Vec<f64>], rows:
 
 /// Per sample, how close to a stop it lets the joint have come unseen: at a turning point (a
 /// sample beyond neither finite neighbour towards `side`, -1 for a lower stop and +1 for an upper
-/// one), the shorter of its distances to those neighbours (a bounce moves on both sides); 0 elsewhere. A joint that bounces off
-/// its stop between two samples (ODE's stops, a real lid dropped shut) turns round short of it
-/// in the record, its impact never seen within the contact band, yet the impulse lands in the
-/// smoothed acceleration.
+/// one), the shorter of its distances to those neighbours (a bounce moves on both sides); 0
+/// elsewhere. A joint that bounces off its stop between two samples (ODE's stops, a real lid
+/// dropped shut) turns round short of it in the record, its impact never seen within the contact
+/// band, yet the impulse lands in the smoothed acceleration.
 fn unseen_approach(y: &[f64], side: f64) -> Vec<f64> {
     let finite: Vec<usize> = (0..y.len()).filter(|&i| y[i].is_finite()).collect();
     let mut reach = vec![0.0; y.len()];

@@ -73,14 +73,14 @@ const ROUNDING_SHARE: f64 = 1e-12;
 /// Marks as missing (NaN) the readings of `q` that repeat the one before them exactly while the
 /// joint then moves on by three steps of its resolution or more ([`STALE_JUMP_RESOLUTIONS`]; the
 /// resolution: the smallest change between consecutive readings beyond rounding,
-/// [`ROUNDING_SHARE`]) and by more
-/// than twice what it moves next, the run, its jump and the next reading all consecutive rows (a
-/// gap of missing rows says nothing of when the joint moved): a log written faster than the signal it holds (a 1 kHz
-/// log of a 200 Hz encoder, topics merged at different rates) repeats the last value until the
-/// next update, and that staircase would read as a joint that stops and jumps every few samples.
-/// A real encoder repeats too, at rest or moving slower than a step per sample, but then moves on
-/// by a step or two (a real double pendulum's 14-bit encoders, DFKI: none marked). The first reading of a run stays (it is the update). Returns how many were
-/// marked.
+/// [`ROUNDING_SHARE`]) and by more than twice what it moves next, the run, its jump and the next
+/// reading all consecutive rows (a gap of missing rows says nothing of when the joint moved). A
+/// log written faster than the signal it holds (a 1 kHz log of a 200 Hz encoder, topics merged at
+/// different rates) repeats the last value until the next update, and that staircase would read
+/// as a joint that stops and jumps every few samples. A real encoder repeats too, at rest or
+/// moving slower than a step per sample, but then moves on by a step or two (a real double
+/// pendulum's 14-bit encoders, DFKI: none marked). The first reading of a run stays (it is the
+/// update). Returns how many were marked.
 fn drop_stale_readings(q: &mut [f64]) -> usize {
     let finite: Vec<usize> = (0..q.len()).filter(|&i| q[i].is_finite()).collect();
     // Changes within rounding of the last digits (a CSV round trip) are no steps: one of them
@@ -101,17 +101,17 @@ fn drop_stale_readings(q: &mut [f64]) -> usize {
         while end < finite.len() && finite[end] == finite[end - 1] + 1 && q[finite[end]] == q[finite[k]] {
             end += 1;
         }
-        // The jump after the run, and the change after that (none at the end of the record).
-        let jump = finite.get(end).map(|&i| (q[i] - q[finite[k]]).abs());
-        let after = finite.get(end + 1).map(|&i| (q[i] - q[finite[end]]).abs());
-        // Stale where the jump carries the motion held back through the run: beyond the
+        // Stale where the jump after the run carries the motion held back through it: beyond the
         // resolution, and more than twice the change that follows (another run, or the joint
         // moving on at its speed). A joint that breaks away from rest moves off slowly and
         // speeds up (stuck by friction in a noise-free recording, where its rests repeat
-        // exactly): its first step is the smaller.
-        let consecutive = finite.get(end + 1).is_some_and(|&i| i == finite[end] + 1 && finite[end] == finite[end - 1] + 1);
-        let stale_run = match (jump, after) {
-            (Some(jump), Some(after)) => consecutive && jump > STALE_JUMP_RESOLUTIONS * resolution && after <= 0.5 * jump,
+        // exactly): its first step is the smaller. Nothing to judge at the end of the record or
+        // across a gap.
+        let stale_run = match (finite.get(end), finite.get(end + 1)) {
+            (Some(&next), Some(&then)) if next == finite[end - 1] + 1 && then == next + 1 => {
+                let jump = (q[next] - q[finite[k]]).abs();
+                jump > STALE_JUMP_RESOLUTIONS * resolution && (q[then] - q[next]).abs() <= 0.5 * jump
+            }
             _ => false,
         };
         if stale_run {

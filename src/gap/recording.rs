@@ -1,6 +1,6 @@
 //! Interaction recordings (spec `gap-recording.md` §2): CSV with `# key: value` metadata lines,
-//! one header row, a strictly increasing `time` column, joint positions, efforts and (checked, unused) velocities, tracked link
-//! poses; empty cells are dropouts. Every rejection names the file, line, column and field.
+//! one header row, a strictly increasing `time` column, joint positions, efforts and (checked,
+//! unused) velocities, tracked link poses; empty and `nan` cells are dropouts. Every rejection names the file, line, column and field.
 //!
 //! Before the header, blank lines are skipped and every line starting with `#` must be
 //! `# key: value` (spec §2; the value may itself hold colons, unknown keys are kept). A `#` line
