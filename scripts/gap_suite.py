@@ -878,6 +878,15 @@ ENGINE_CASES = {
 }
 
 
+# The ENGINE_CASES an engine with joint friction and damping but neither joint springs nor
+# armature makes (Klamp't, JaxSim).
+FRICTION_DAMPING_CASES = (
+    "door_friction", "drawer_friction", "door_damping", "sash_mass_scale", "drawer_end_stop", "door_friction_damping",
+    "lid_mass_damping", "lid_mass_friction", "double_pendulum_elbow_friction", "double_pendulum_elbow_damping",
+    "drawer_small_damping", "none_door_pushes", "none_double_pendulum", "none_lid_pose",
+)
+
+
 def engine_case(prefix, engine, key, **changes):
     """The shared case ENGINE_CASES[key] of an engine suite: named <prefix>_<key>, simulated by `engine` (a key of
     SIMULATORS), with the fields in `changes` (an engine's own description) replaced."""

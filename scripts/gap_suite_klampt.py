@@ -454,22 +454,7 @@ gs.measure_restitution = measure_restitution
 
 def cases():
     shared = functools.partial(gs.engine_case, "klampt", "klampt")  # gap_suite.ENGINE_CASES, named klampt_<key>
-    return [
-        shared("door_friction"),
-        shared("drawer_friction"),
-        shared("door_damping"),
-        shared("sash_mass_scale"),
-        shared("drawer_end_stop"),
-        shared("door_friction_damping"),
-        shared("lid_mass_damping"),
-        shared("lid_mass_friction"),
-        shared("double_pendulum_elbow_friction"),
-        shared("double_pendulum_elbow_damping"),
-        shared("drawer_small_damping"),
-        shared("none_door_pushes"),
-        shared("none_double_pendulum"),
-        shared("none_lid_pose"),
-    ]
+    return [shared(key) for key in gs.FRICTION_DAMPING_CASES]
 
 
 # ---------------------------------------------------------------- recording and truth
