@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::fit::PointSpan;
 use crate::kinematics::{Joint, JointEvidence};
 use crate::primitive::Primitive;
 use crate::report::Warning;
@@ -42,6 +43,10 @@ pub struct PartModel {
     /// Mean distance from the part's points to the primitive surface, metres.
     pub fit_error: f32,
     pub point_count: usize,
+    /// Where the part's points end along the primitive's axes, when the points were at hand
+    /// (joint fitting reads a door's back from it); not written to `scene.json`.
+    #[serde(skip)]
+    pub points_span: Option<PointSpan>,
 }
 
 /// A candidate parent → child contact (paper eq. 1–2): weight = max contact ratio Cont.

@@ -12,7 +12,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::fit::{FitConfig, fit_part};
+use crate::fit::{FitConfig, fit_part, point_span};
 use crate::kinematics::evidence::CONF_PINNED;
 use crate::kinematics::{
     Joint, JointContext, JointEvidence, JointKind, JointSpec, KinematicsConfig, Template, Vocabulary, decide, fit_joint,
@@ -120,6 +120,7 @@ pub fn fit_one_part(part: &ScanPart, cfg: &PipelineConfig, forced: Option<Primit
         primitive: fit.primitive,
         fit_error: fit.fit_error,
         point_count: part.points.len(),
+        points_span: point_span(&part.points, &fit.primitive),
     })
 }
 
@@ -138,6 +139,7 @@ fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits, voca
         if let Some((prim, err)) = upright_refit(points, &p.primitive, p.fit_error) {
             p.primitive = prim;
             p.fit_error = err;
+            p.points_span = point_span(points, &prim);
         }
     });
     // The reference of each object: its most base-like part (the tree's preferred root).
@@ -157,6 +159,7 @@ fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits, voca
         if let Some((prim, err)) = coalign(points, &p.primitive, &ref_prim, p.fit_error) {
             p.primitive = prim;
             p.fit_error = err;
+            p.points_span = point_span(points, &prim);
         }
     });
 }
@@ -354,13 +357,13 @@ pub fn assemble_observed(
     for o in &scene_objects {
         final_prims.extend(o.parts.iter().copied());
     }
-    let labels: BTreeMap<PartId, &str> = fitted.parts.iter().map(|p| (p.id, p.label.as_str())).collect();
+    let fitted_parts: BTreeMap<PartId, &PartModel> = fitted.parts.iter().map(|p| (p.id, p)).collect();
     let mut joints = Vec::new();
     let mut evidence = Vec::new();
     for (obj, tree) in &trees {
         let category = categories.get(obj).map_or("", String::as_str);
         for (&child, &parent) in &tree.parent {
-            let (joint, why) = make_joint(tree, (parent, child), category, &final_prims, &labels, cfg, edits);
+            let (joint, why) = make_joint(tree, (parent, child), category, &final_prims, &fitted_parts, cfg, edits);
             joints.push(joint);
             evidence.push(why);
         }
@@ -400,17 +403,18 @@ fn make_joint(
     (parent, child): (PartId, PartId),
     category: &str,
     prims: &BTreeMap<PartId, Primitive>,
-    labels: &BTreeMap<PartId, &str>,
+    fitted: &BTreeMap<PartId, &PartModel>,
     cfg: &PipelineConfig,
     edits: &PinnedEdits,
 ) -> (Joint, JointEvidence) {
     let vocab = cfg.vocabulary.as_ref();
-    let label = labels.get(&child).copied().unwrap_or("");
+    let label_of = |id: &PartId| fitted.get(id).map(|p| p.label.as_str());
+    let label = label_of(&child).unwrap_or("");
     // A handle mounted on the child tells the front; a handle, knob or latch the side that opens.
     let mounted = |grip_only: bool| {
         tree.children(child)
             .into_iter()
-            .find(|c| labels.get(c).is_some_and(|l| if grip_only { vocab.is_grip(l) } else { vocab.marks_free_edge(l) }))
+            .find(|c| label_of(c).is_some_and(|l| if grip_only { vocab.is_grip(l) } else { vocab.marks_free_edge(l) }))
             .and_then(|c| prims.get(&c))
             .map(Primitive::center)
     };
@@ -422,7 +426,7 @@ fn make_joint(
     let object_parts: Vec<(&Primitive, &str)> = std::iter::once(tree.root)
         .chain(tree.parent.keys().copied())
         .filter(|&id| id != child && id != parent)
-        .filter_map(|id| Some((prims.get(&id)?, labels.get(&id).copied().unwrap_or(""))))
+        .filter_map(|id| Some((prims.get(&id)?, label_of(&id).unwrap_or(""))))
         .collect();
     let ctx = JointContext { label, category, parent: pp, child: cp, grip: mounted(true), others: object_parts };
     let mut decision = decide(vocab, &ctx);
@@ -444,6 +448,7 @@ fn make_joint(
         mount_normal,
         axis_line: decision.axis_line,
         hinge_edge_world: edits.hinge_edge.get(&child).copied(),
+        child_span: fitted.get(&child).and_then(|p| p.points_span),
     };
     let (mut joint, hinge_edge) = fit_joint(parent, pp, child, cp, &spec, &cfg.kinematics);
     if let Some(axis) = edits.axis.get(&child) {

@@ -21,6 +21,7 @@ fn part(id: i64, object: i64, label: &str, center: [f32; 3], size: [f32; 3]) -> 
         primitive: Primitive::cuboid_at(Vec3::from_array(center), Vec3::from_array(size)),
         fit_error: 0.001,
         point_count: 100,
+        points_span: None,
     }
 }
 

@@ -442,6 +442,7 @@ mod tests {
                 primitive: p.shapes[0],
                 fit_error: 0.0,
                 point_count: 100,
+                points_span: None,
             })
             .collect();
         let contact_edges =

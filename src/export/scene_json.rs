@@ -103,6 +103,7 @@ pub fn scene_from_json(text: &str, path: &str) -> Result<SceneModel, SceneJsonEr
             primitive: p.primitive,
             fit_error: p.fit_error,
             point_count: p.point_count,
+            points_span: None,
         })
         .collect();
     parts.sort_by_key(|p| p.id);

@@ -49,10 +49,12 @@
 pub mod icp;
 pub mod obb;
 pub mod select;
+pub mod span;
 
 pub use icp::{IcpConfig, IcpResult, icp_align};
 pub use obb::{MIN_EXTENT_M, Obb, min_volume_obb};
 pub use select::{Candidate, FitConfig, FitError, PartFit, fit_part};
+pub use span::{PointSpan, point_span};
 
 use crate::math::Vec3;
 

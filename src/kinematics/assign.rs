@@ -23,6 +23,7 @@ use serde::{Deserialize, Serialize};
 
 use super::joint::{Joint, JointKind};
 use super::vocabulary::Template;
+use crate::fit::PointSpan;
 use crate::math::{UP, Vec3};
 use crate::primitive::{Primitive, PrimitiveKind};
 use crate::scan::PartId;
@@ -99,6 +100,9 @@ pub struct JointSpec {
     /// The edge a person chose for a door's or lid's hinge: a world direction from the part's
     /// centre towards it ([`crate::edit::EditCommand::OtherHingeEdge`]).
     pub hinge_edge_world: Option<Vec3>,
+    /// Where the child's points end along its primitive's axes (a door's back, which a box
+    /// fitted to a door with its handle can stop short of).
+    pub child_span: Option<PointSpan>,
 }
 
 /// How a hinge's edge was chosen ([`fit_joint`]); the evidence states it with a confidence.
@@ -201,7 +205,7 @@ pub fn fit_joint(
             joint.axis_world = axis;
         }
         Template::Hinge | Template::LidHinge => {
-            let (axis, pivot, edge) = hinge(parent, child, out, spec.handle, spec.hinge_edge_world);
+            let (axis, pivot, edge) = hinge(parent, child, out, spec);
             joint.axis_world = axis;
             joint.origin_world = pivot;
             hinge_edge = Some(edge);
@@ -372,15 +376,15 @@ pub fn joint_from_handle(parent: &Primitive, child: &Primitive, handle: Vec3) ->
 }
 
 /// Hinge line of a door or lid: direction (signed so a positive angle opens outward), a pivot
-/// point, and how its edge was chosen. `pinned_edge` (a person's choice: a world direction from
-/// the part's centre towards the edge) overrides the rules.
-fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, handle: Option<Vec3>, pinned_edge: Option<Vec3>) -> (Vec3, Vec3, HingeEdge) {
+/// point, and how its edge was chosen. The spec's `hinge_edge_world` (a person's choice: a world
+/// direction from the part's centre towards the edge) overrides the rules.
+fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, spec: &JointSpec) -> (Vec3, Vec3, HingeEdge) {
     let axes = door.axes_world();
     let half = door.size * 0.5;
     let thick = (0..3).max_by(|&a, &b| axes[a].dot(out).abs().total_cmp(&axes[b].dot(out).abs())).unwrap_or(2);
     let in_plane = ((thick + 1) % 3, (thick + 2) % 3);
     let c = door.center();
-    let pinned = pinned_edge.and_then(|dir| {
+    let pinned = spec.hinge_edge_world.and_then(|dir| {
         // The in-plane axis the chosen edge lies across, and its side.
         let (i1, i2) = in_plane;
         let (h, a) = if axes[i1].dot(dir).abs() >= axes[i2].dot(dir).abs() { (i2, i1) } else { (i1, i2) };
@@ -388,12 +392,16 @@ fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, handle: Option<Vec3>, 
         (along.abs() > 1e-3).then(|| (h, a, along.signum(), HingeEdge::Pinned))
     });
     let (hinge_axis, across, side, edge) =
-        pinned.or_else(|| edge_from_grip(door, handle, in_plane)).unwrap_or_else(|| edge_without_grip(parent, door, out, in_plane));
-    let pivot = match inset_pin_offset(parent, door, axes[across] * side, out, half[across]) {
+        pinned.or_else(|| edge_from_grip(door, spec.handle, in_plane)).unwrap_or_else(|| edge_without_grip(parent, door, out, in_plane));
+    let pivot = if let Some(past_edge) = inset_pin_offset(parent, door, axes[across] * side, out, half[across]) {
         // An inset door: its pin stands in the jamb beside its edge, at mid-thickness.
-        Some(past_edge) => c + axes[across] * (side * (half[across] + past_edge)),
-        // An overlay door or lid swings about its back edge, against the parent's face.
-        None => c + axes[across] * (side * half[across]) - out * (axes[thick].dot(out).abs() * half[thick]),
+        c + axes[across] * (side * (half[across] + past_edge))
+    } else {
+        // An overlay door or lid swings about its back edge, against the parent's face: where
+        // its points end behind it when they reach past its box.
+        let facing = axes[thick].dot(out);
+        let behind = spec.child_span.map_or(half[thick], |span| span.reach_behind(thick, facing).max(half[thick]));
+        c + axes[across] * (side * half[across]) - out * (facing.abs() * behind)
     };
     let mut axis = axes[hinge_axis];
     if axis.cross(c - pivot).dot(out) < 0.0 {
@@ -491,7 +499,7 @@ mod tests {
     use super::*;
 
     fn spec(kind: JointKind, template: Template, handle: Option<Vec3>, mount_normal: Option<Vec3>) -> JointSpec {
-        JointSpec { kind, template, handle, mount_normal, axis_line: None, hinge_edge_world: None }
+        JointSpec { kind, template, handle, mount_normal, axis_line: None, hinge_edge_world: None, child_span: None }
     }
 
     /// What [`joint_from_handle`] makes of `child` on `parent` with a handle at `handle`.
@@ -736,6 +744,29 @@ mod tests {
         )
         .0;
         assert!((j.origin_world.x + 0.2).abs() < 1e-5 && (j.origin_world.y - 0.05).abs() < 1e-5, "{j:?}");
+    }
+
+    #[test]
+    fn a_door_whose_box_stops_short_of_its_points_turns_at_their_back() {
+        // Regression (a microwave whose door mesh carries its handle): the box fitted to the
+        // door ran from the panel's front face to the handle's, and the hinge stood on that box's
+        // back face, 4.4 cm in front of the pin; the panel's sides reach back to the body.
+        let body = Primitive::cuboid_at(Vec3::new(0.0, 0.04, 0.19), Vec3::new(0.69, 0.44, 0.37));
+        let front_box = Primitive::cuboid_at(Vec3::new(-0.11, -0.217, 0.2), Vec3::new(0.47, 0.071, 0.35));
+        // The points end 8 cm behind the box's centre (at y = -0.137), 4.4 cm behind its back face.
+        let span = PointSpan { min_local: Vec3::new(-0.235, -0.046, -0.175), max_local: Vec3::new(0.283, 0.08, 0.175) };
+        let handle = Vec3::new(0.13, -0.243, 0.19);
+        let door_spec = |child_span| JointSpec { child_span, ..spec(JointKind::Revolute, Template::Hinge, Some(handle), None) };
+        let cfg = KinematicsConfig::default();
+        let with_points = fit_joint(1, &body, 2, &front_box, &door_spec(Some(span)), &cfg).0;
+        assert!((with_points.origin_world.y + 0.137).abs() < 1e-4, "at the points' back: {with_points:?}");
+        assert!((with_points.origin_world.x + 0.345).abs() < 1e-4, "on the edge away from the handle: {with_points:?}");
+        let box_only = fit_joint(1, &body, 2, &front_box, &door_spec(None), &cfg).0;
+        assert!((box_only.origin_world.y + 0.1815).abs() < 1e-4, "at the box's back: {box_only:?}");
+        // Points that end inside the box leave it as it is.
+        let inside = PointSpan { min_local: Vec3::splat(-0.01), max_local: Vec3::splat(0.01) };
+        let j = fit_joint(1, &body, 2, &front_box, &door_spec(Some(inside)), &cfg).0;
+        assert!((j.origin_world - box_only.origin_world).length() < 1e-6, "{j:?}");
     }
 
     #[test]

@@ -399,6 +399,7 @@ mod tests {
             primitive: Primitive::cuboid_at(center, size),
             fit_error: 0.0,
             point_count: 0,
+            points_span: None,
         };
         SceneModel {
             parts: vec![part(1, Vec3::new(0.0, 0.0, 0.5), Vec3::ONE), part(2, Vec3::new(0.0, -0.51, 0.5), Vec3::new(0.8, 0.02, 0.8))],
