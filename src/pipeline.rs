@@ -398,6 +398,10 @@ pub fn assemble_observed(
     (scene, stats)
 }
 
+/// How far behind a door's box its pin must stand, because the door's points reach there, for
+/// the evidence to say so (below it: the box's own fit noise).
+const PIN_PAST_BOX_NOTED_M: f32 = 0.005;
+
 fn make_joint(
     tree: &PartTree,
     (parent, child): (PartId, PartId),
@@ -450,7 +454,7 @@ fn make_joint(
         hinge_edge_world: edits.hinge_edge.get(&child).copied(),
         child_span: fitted.get(&child).and_then(|p| p.points_span),
     };
-    let (mut joint, hinge_edge) = fit_joint(parent, pp, child, cp, &spec, &cfg.kinematics);
+    let (mut joint, hinge) = fit_joint(parent, pp, child, cp, &spec, &cfg.kinematics);
     if let Some(axis) = edits.axis.get(&child) {
         joint.axis_world = axis.normalize_or(joint.axis_world);
     }
@@ -462,8 +466,14 @@ fn make_joint(
     let (parent_rule, parent_conf) = parent_evidence(tree, parent, child, edits.parent.contains_key(&child));
     evidence.parent_rule = parent_rule;
     evidence.parent_confidence = parent_conf;
-    if let Some(edge) = hinge_edge {
-        (evidence.axis_rule, evidence.axis_confidence) = hinge_edge_evidence(edge);
+    if let Some(placement) = hinge {
+        (evidence.axis_rule, evidence.axis_confidence) = hinge_edge_evidence(placement.edge);
+        if placement.past_box_m >= PIN_PAST_BOX_NOTED_M {
+            evidence.tests.push(format!(
+                "pin at the back of the part's points, {:.1} cm behind its box (the box stops short of the part's material: a grip in its mesh?)",
+                100.0 * placement.past_box_m
+            ));
+        }
     }
     evidence.confidence = evidence.type_confidence * parent_conf * evidence.axis_confidence;
     (joint, evidence)

@@ -6,7 +6,7 @@
 //! | --- | --- | --- | --- | --- |
 //! | fixed | fixed | — | child centre | 0 |
 //! | drawer | prismatic | the parent's face normal the part sits on, outward | child centre | 0 .. `drawer_travel` × parent depth |
-//! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one, on the outer edge; a lid's longer edge towards the parent's centre; centred on the parent without a grip: either edge, [`HingeEdge::Undetermined`]) | on that edge, at the door's back face; a door set into its parent's opening (half its thickness or more within the parent's depth): in the jamb beside the edge, at mid-thickness | 0 .. `revolute_upper_rad` |
+//! | `hinge`, `lid_hinge` | revolute | the door edge away from its handle (vertical for side doors without one, on the outer edge; a lid's longer edge towards the parent's centre; centred on the parent without a grip: either edge, [`HingeEdge::Undetermined`]) | on that edge, at the door's back face (where its points end, when they reach past its box); a door set into its parent's opening (half its thickness or more within the parent's depth): in the jamb beside the edge, at mid-thickness | 0 .. `revolute_upper_rad` |
 //! | `sliding_panel` | prismatic | in the panel's plane, towards the parent's centre (where it has room) | child centre | 0 .. the gap |
 //! | knob | revolute | the outward face normal (or the round axis a test found; touching nothing, a disc's thin axis) | knob centre | −π .. π |
 //! | lever | revolute | the outward face normal | a bar (≥ `lever_min_elongation` × as long as wide across the axis): its end away from a grip on it, else the end nearer the parent's centre; otherwise, or through its mount, its centre | −π .. π |
@@ -121,6 +121,16 @@ pub enum HingeEdge {
     Pinned,
 }
 
+/// Where a hinge stands and why ([`fit_joint`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HingePlacement {
+    /// How its edge was chosen.
+    pub edge: HingeEdge,
+    /// How far behind the back face of the part's box its pin stands because the part's points
+    /// reach past that face (a box fitted to a door with its handle), metres; 0 otherwise.
+    pub past_box_m: f32,
+}
+
 /// A door or lid whose centre lies within this fraction of its half-width (across the hinge)
 /// of its parent's centre is centred on it: its offset says nothing of its hinge side.
 pub const CENTRED_ON_PARENT: f32 = 0.1;
@@ -129,8 +139,8 @@ pub const CENTRED_ON_PARENT: f32 = 0.1;
 /// docs). The mount normal is the direction a drawer slides, a door opens towards, a knob turns
 /// about. A vertical mount normal for a side-opening template (drawer, door hinge, sliding panel;
 /// found resting on a shelf rather than hung in the front) is not trusted; then, and without a
-/// contact, [`outward_direction`] decides from the geometry. How a hinge's edge was chosen is
-/// returned beside the joint (`None` for other templates).
+/// contact, [`outward_direction`] decides from the geometry. Where a hinge stands and how its
+/// edge was chosen is returned beside the joint (`None` for other templates).
 #[must_use]
 pub fn fit_joint(
     parent_id: PartId,
@@ -139,7 +149,7 @@ pub fn fit_joint(
     child: &Primitive,
     spec: &JointSpec,
     cfg: &KinematicsConfig,
-) -> (Joint, Option<HingeEdge>) {
+) -> (Joint, Option<HingePlacement>) {
     let side_opening = matches!(spec.template, Template::SlidingPanel | Template::Drawer | Template::Hinge);
     let out = match spec.mount_normal {
         Some(n) if !(side_opening && n.dot(UP).abs() > 0.7) => n.normalize_or(Vec3::Z),
@@ -205,10 +215,10 @@ pub fn fit_joint(
             joint.axis_world = axis;
         }
         Template::Hinge | Template::LidHinge => {
-            let (axis, pivot, edge) = hinge(parent, child, out, spec);
+            let (axis, pivot, placement) = hinge(parent, child, out, spec);
             joint.axis_world = axis;
             joint.origin_world = pivot;
-            hinge_edge = Some(edge);
+            hinge_edge = Some(placement);
             joint.upper = cfg.revolute_upper_rad;
         }
         Template::LiftOff => {
@@ -378,7 +388,7 @@ pub fn joint_from_handle(parent: &Primitive, child: &Primitive, handle: Vec3) ->
 /// Hinge line of a door or lid: direction (signed so a positive angle opens outward), a pivot
 /// point, and how its edge was chosen. The spec's `hinge_edge_world` (a person's choice: a world
 /// direction from the part's centre towards the edge) overrides the rules.
-fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, spec: &JointSpec) -> (Vec3, Vec3, HingeEdge) {
+fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, spec: &JointSpec) -> (Vec3, Vec3, HingePlacement) {
     let axes = door.axes_world();
     let half = door.size * 0.5;
     let thick = (0..3).max_by(|&a, &b| axes[a].dot(out).abs().total_cmp(&axes[b].dot(out).abs())).unwrap_or(2);
@@ -393,6 +403,7 @@ fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, spec: &JointSpec) -> (
     });
     let (hinge_axis, across, side, edge) =
         pinned.or_else(|| edge_from_grip(door, spec.handle, in_plane)).unwrap_or_else(|| edge_without_grip(parent, door, out, in_plane));
+    let mut past_box_m = 0.0;
     let pivot = if let Some(past_edge) = inset_pin_offset(parent, door, axes[across] * side, out, half[across]) {
         // An inset door: its pin stands in the jamb beside its edge, at mid-thickness.
         c + axes[across] * (side * (half[across] + past_edge))
@@ -400,14 +411,15 @@ fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, spec: &JointSpec) -> (
         // An overlay door or lid swings about its back edge, against the parent's face: where
         // its points end behind it when they reach past its box.
         let facing = axes[thick].dot(out);
-        let behind = spec.child_span.map_or(half[thick], |span| span.reach_behind(thick, facing).max(half[thick]));
+        let behind = spec.child_span.and_then(|span| span.reach_behind(thick, facing)).map_or(half[thick], |r| r.max(half[thick]));
+        past_box_m = behind - half[thick];
         c + axes[across] * (side * half[across]) - out * (facing.abs() * behind)
     };
     let mut axis = axes[hinge_axis];
     if axis.cross(c - pivot).dot(out) < 0.0 {
         axis = -axis;
     }
-    (axis, pivot, edge)
+    (axis, pivot, HingePlacement { edge, past_box_m })
 }
 
 /// A hinge's (axis index, across index, side along the across axis, how chosen) from a grip
@@ -680,7 +692,8 @@ mod tests {
         let template = if lid { Template::LidHinge } else { Template::Hinge };
         let out = if lid { Vec3::Z } else { Vec3::Y };
         let spec = JointSpec { hinge_edge_world: pinned, ..spec(JointKind::Revolute, template, handle, Some(out)) };
-        let (j, edge) = fit_joint(1, &cabinet_body(), 2, door, &spec, &KinematicsConfig::default());
+        let (j, placement) = fit_joint(1, &cabinet_body(), 2, door, &spec, &KinematicsConfig::default());
+        let edge = placement.map(|h| h.edge);
         assert!(
             edge == Some(expected.0) && (j.origin_world - expected.1).length() < 1e-5,
             "{door:?}, handle {handle:?}, pinned {pinned:?}: {edge:?} at {}, expected {expected:?}",
@@ -754,17 +767,24 @@ mod tests {
         let body = Primitive::cuboid_at(Vec3::new(0.0, 0.04, 0.19), Vec3::new(0.69, 0.44, 0.37));
         let front_box = Primitive::cuboid_at(Vec3::new(-0.11, -0.217, 0.2), Vec3::new(0.47, 0.071, 0.35));
         // The points end 8 cm behind the box's centre (at y = -0.137), 4.4 cm behind its back face.
-        let span = PointSpan { min_local: Vec3::new(-0.235, -0.046, -0.175), max_local: Vec3::new(0.283, 0.08, 0.175) };
+        let span = PointSpan {
+            min_local: Vec3::new(-0.235, -0.046, -0.175),
+            max_local: Vec3::new(0.283, 0.08, 0.175),
+            share_past_min: Vec3::ZERO,
+            share_past_max: Vec3::new(0.0, 0.2, 0.0),
+        };
         let handle = Vec3::new(0.13, -0.243, 0.19);
         let door_spec = |child_span| JointSpec { child_span, ..spec(JointKind::Revolute, Template::Hinge, Some(handle), None) };
         let cfg = KinematicsConfig::default();
-        let with_points = fit_joint(1, &body, 2, &front_box, &door_spec(Some(span)), &cfg).0;
+        let (with_points, placement) = fit_joint(1, &body, 2, &front_box, &door_spec(Some(span)), &cfg);
         assert!((with_points.origin_world.y + 0.137).abs() < 1e-4, "at the points' back: {with_points:?}");
+        assert!(placement.is_some_and(|h| (h.past_box_m - 0.0445).abs() < 1e-4), "{placement:?}");
         assert!((with_points.origin_world.x + 0.345).abs() < 1e-4, "on the edge away from the handle: {with_points:?}");
-        let box_only = fit_joint(1, &body, 2, &front_box, &door_spec(None), &cfg).0;
+        let (box_only, placement) = fit_joint(1, &body, 2, &front_box, &door_spec(None), &cfg);
+        assert!(placement.is_some_and(|h| h.past_box_m == 0.0), "{placement:?}");
         assert!((box_only.origin_world.y + 0.1815).abs() < 1e-4, "at the box's back: {box_only:?}");
-        // Points that end inside the box leave it as it is.
-        let inside = PointSpan { min_local: Vec3::splat(-0.01), max_local: Vec3::splat(0.01) };
+        // Too few points past the box (noise, a neighbour's points at the border) leave it as it is.
+        let inside = PointSpan { max_local: Vec3::new(0.283, 0.08, 0.175), share_past_max: Vec3::new(0.0, 0.05, 0.0), ..span };
         let j = fit_joint(1, &body, 2, &front_box, &door_spec(Some(inside)), &cfg).0;
         assert!((j.origin_world - box_only.origin_world).length() < 1e-6, "{j:?}");
     }
