@@ -88,7 +88,7 @@ pub fn fit_parts(scan: &Scan, cfg: &PipelineConfig, edits: &PinnedEdits, progres
         .parts
         .par_iter()
         .map(|part| {
-            let r = fit_one_part(part, cfg, edits.primitive_kind.get(&part.id).copied());
+            let r = fit_part_model(part, cfg, edits.primitive_kind.get(&part.id).copied());
             progress.update("fit", done.fetch_add(1, Ordering::Relaxed) + 1, total);
             r.map_err(|w| (part.id, w))
         })
@@ -104,12 +104,22 @@ pub fn fit_parts(scan: &Scan, cfg: &PipelineConfig, edits: &PinnedEdits, progres
         }
     }
     coalign_parts(scan, &mut out.parts, edits, &cfg.vocabulary);
+    // Where each part's points end, once, along its final primitive.
+    out.parts.par_iter_mut().for_each(|p| {
+        p.points_span = scan.part(p.id).and_then(|s| point_span(&s.points, &p.primitive));
+    });
     out
 }
 
 /// Fits one part on its own: with `forced` the kind a person pinned, else the best kind under the
 /// label shape prior. (Co-alignment within the object is left to [`fit_parts`].)
 pub fn fit_one_part(part: &ScanPart, cfg: &PipelineConfig, forced: Option<PrimitiveKind>) -> Result<PartModel, Warning> {
+    let model = fit_part_model(part, cfg, forced)?;
+    Ok(PartModel { points_span: point_span(&part.points, &model.primitive), ..model })
+}
+
+/// [`fit_one_part`] without the points' span (the caller measures it on the final primitive).
+fn fit_part_model(part: &ScanPart, cfg: &PipelineConfig, forced: Option<PrimitiveKind>) -> Result<PartModel, Warning> {
     let fit = fit_part(&part.points, &cfg.fit, forced)
         .map(|fit| if forced.is_none() { prefer_box_for_boards(&cfg.vocabulary, &part.label, &part.points, fit) } else { fit })
         .map_err(|e| Warning::new("fit", format!("part {}", part.id), format!("{e}; part left out")))?;
@@ -120,7 +130,7 @@ pub fn fit_one_part(part: &ScanPart, cfg: &PipelineConfig, forced: Option<Primit
         primitive: fit.primitive,
         fit_error: fit.fit_error,
         point_count: part.points.len(),
-        points_span: point_span(&part.points, &fit.primitive),
+        points_span: None,
     })
 }
 
@@ -139,7 +149,6 @@ fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits, voca
         if let Some((prim, err)) = upright_refit(points, &p.primitive, p.fit_error) {
             p.primitive = prim;
             p.fit_error = err;
-            p.points_span = point_span(points, &prim);
         }
     });
     // The reference of each object: its most base-like part (the tree's preferred root).
@@ -159,7 +168,6 @@ fn coalign_parts(scan: &Scan, parts: &mut [PartModel], edits: &PinnedEdits, voca
         if let Some((prim, err)) = coalign(points, &p.primitive, &ref_prim, p.fit_error) {
             p.primitive = prim;
             p.fit_error = err;
-            p.points_span = point_span(points, &prim);
         }
     });
 }

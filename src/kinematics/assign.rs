@@ -403,17 +403,15 @@ fn hinge(parent: &Primitive, door: &Primitive, out: Vec3, spec: &JointSpec) -> (
     });
     let (hinge_axis, across, side, edge) =
         pinned.or_else(|| edge_from_grip(door, spec.handle, in_plane)).unwrap_or_else(|| edge_without_grip(parent, door, out, in_plane));
-    let mut past_box_m = 0.0;
-    let pivot = if let Some(past_edge) = inset_pin_offset(parent, door, axes[across] * side, out, half[across]) {
+    let (pivot, past_box_m) = if let Some(past_edge) = inset_pin_offset(parent, door, axes[across] * side, out, half[across]) {
         // An inset door: its pin stands in the jamb beside its edge, at mid-thickness.
-        c + axes[across] * (side * (half[across] + past_edge))
+        (c + axes[across] * (side * (half[across] + past_edge)), 0.0)
     } else {
         // An overlay door or lid swings about its back edge, against the parent's face: where
         // its points end behind it when they reach past its box.
         let facing = axes[thick].dot(out);
         let behind = spec.child_span.and_then(|span| span.reach_behind(thick, facing)).map_or(half[thick], |r| r.max(half[thick]));
-        past_box_m = behind - half[thick];
-        c + axes[across] * (side * half[across]) - out * (facing.abs() * behind)
+        (c + axes[across] * (side * half[across]) - out * (facing.abs() * behind), behind - half[thick])
     };
     let mut axis = axes[hinge_axis];
     if axis.cross(c - pivot).dot(out) < 0.0 {
