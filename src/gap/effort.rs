@@ -270,6 +270,14 @@ impl Signals {
         let values: Vec<f64> = self.raw[d].iter().map(|&x| if x.iter().all(|v| v.is_finite()) { f(x) } else { f64::NAN }).collect();
         self.filter.apply(&values).into_iter().zip(keep).map(|(v, &k)| if k { v } else { f64::NAN }).collect()
     }
+
+    /// A term evaluated on dof `d`'s smoothed motion (`q`) instead, then filtered like the
+    /// efforts; NaN outside `keep`. Dry friction is read both ways ([`EffortProblem`]'s friction
+    /// candidates).
+    fn motion_term(&self, d: usize, keep: &[bool], f: &dyn Fn([f64; 3]) -> f64) -> Vec<f64> {
+        let values: Vec<f64> = self.q[d].iter().map(|&x| if x.iter().all(|v| v.is_finite()) { f(x) } else { f64::NAN }).collect();
+        self.filter.apply(&values).into_iter().zip(keep).map(|(v, &k)| if k { v } else { f64::NAN }).collect()
+    }
 }
 
 /// One candidate term on one joint: its kind, its hyper-parameters, its regressor columns.
@@ -736,6 +744,45 @@ impl EffortProblem<'_> {
         self.candidates.push(Candidate { row, kind, hyper, asymmetric, columns, family });
     }
 
+    /// The dry-friction candidates of row r (`ok`: its used samples; `v_rms`: its RMS speed):
+    /// smooth Coulomb over a grid of transition speeds, the same by direction, Stribeck.
+    ///
+    /// Dry friction's law is a sharp function of the speed, so which speed it is evaluated on
+    /// matters where the joint is slow. On the narrowly differentiated speed (like every other
+    /// term) a sharp law keeps its shape through the filter on a joint that slides and turns;
+    /// where the joint is stuck or creeping that speed's sign is noise and the filtered law is
+    /// mush. On the smoothed speed the law is near zero at rest, which is what a stuck joint's
+    /// friction is where little pushes it, but smeared over a reversal. Neither is right for
+    /// every engine: Klamp't's door (ODE, friction and damping, stuck most of the time) was read
+    /// as friction alone on the narrow speed and right on the smoothed one; the Panda in
+    /// `MuJoCo`, whose friction holds a joint at its reversals, got a false armature on the
+    /// smoothed one alone.
+    /// So each law is a candidate both ways, one family: the held-out error picks the reading,
+    /// and on a tie the narrow one, which comes first.
+    fn push_dry_friction(&mut self, r: usize, sig: &Signals, ok: &[bool], v_rms: f64) {
+        let (d, n) = (self.rows[r].dof, sig.time_s.len());
+        let dry = |smoothed: bool, f: &dyn Fn([f64; 3]) -> f64| -> (Vec<f64>, Vec<f64>) {
+            let values = if smoothed { sig.motion_term(d, ok, f) } else { sig.term(d, ok, f) };
+            (values, (0..n).map(|i| if ok[i] { f(sig.q[d][i]) } else { f64::NAN }).collect())
+        };
+        for smoothed in [false, true] {
+            for m in TRANSITION_GRID {
+                let vs = m * v_rms;
+                self.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], false, vec![dry(smoothed, &|x| (x[1] / vs).tanh())]);
+                let pos = dry(smoothed, &|x| if x[1] > 0.0 { (x[1] / vs).tanh() } else { 0.0 });
+                let neg = dry(smoothed, &|x| if x[1] < 0.0 { (x[1] / vs).tanh() } else { 0.0 });
+                self.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], true, vec![pos, neg]);
+            }
+            let vt = TRANSITION_GRID[1] * v_rms;
+            for m in STRIBECK_GRID {
+                let ss = m * v_rms;
+                let base = dry(smoothed, &|x| (x[1] / vt).tanh());
+                let extra = dry(smoothed, &|x| (-(x[1] / ss).powi(2)).exp() * (x[1] / vt).tanh());
+                self.push(r, EffectKind::StribeckFriction, Family::Friction, vec![ss], false, vec![base, extra]);
+            }
+        }
+    }
+
     /// Every candidate term of every row, with its regressor columns.
     fn build_candidates(&mut self, sig: &Signals, me: &ModelEfforts, part_of: &[Vec<usize>], gravity_dir: DVec3) {
         let n = sig.time_s.len();
@@ -750,20 +797,7 @@ impl EffortProblem<'_> {
             let v_rms = rms((0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][1])).max(1e-6);
             let qs: Vec<f64> = (0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][0]).collect();
             let (lo, hi) = qs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
-            for m in TRANSITION_GRID {
-                let vs = m * v_rms;
-                self.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], false, vec![col(&|x| (x[1] / vs).tanh())]);
-                let pos = col(&|x| if x[1] > 0.0 { (x[1] / vs).tanh() } else { 0.0 });
-                let neg = col(&|x| if x[1] < 0.0 { (x[1] / vs).tanh() } else { 0.0 });
-                self.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], true, vec![pos, neg]);
-            }
-            let vt = TRANSITION_GRID[1] * v_rms;
-            for m in STRIBECK_GRID {
-                let ss = m * v_rms;
-                let base = col(&|x| (x[1] / vt).tanh());
-                let extra = col(&|x| (-(x[1] / ss).powi(2)).exp() * (x[1] / vt).tanh());
-                self.push(r, EffectKind::StribeckFriction, Family::Friction, vec![ss], false, vec![base, extra]);
-            }
+            self.push_dry_friction(r, sig, &ok, v_rms);
             self.push(r, EffectKind::ViscousDamping, Family::Viscous, Vec::new(), false, vec![col(&|x| x[1])]);
             self.push(r, EffectKind::EffortOffset, Family::Constant, Vec::new(), false, vec![col(&|_| -1.0)]);
             self.push(r, EffectKind::Spring, Family::Constant, Vec::new(), false, vec![col(&|x| x[0]), col(&|_| -1.0)]);
