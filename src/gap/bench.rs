@@ -254,6 +254,38 @@ pub fn motion_ranges(report: &GapReport) -> BTreeMap<String, f64> {
         .collect()
 }
 
+/// Share of a joint's measured range within which its motion counts as reaching a truth end stop.
+pub const STOP_REACH_SHARE: f64 = 0.01;
+
+/// The truth without the end stops that the joint's measured motion never reaches (farther than
+/// [`STOP_REACH_SHARE`] of its range beyond its extremes): such a stop changes nothing in the
+/// recording, and nothing can find it (a generator's door pushed toward random targets that all
+/// stayed short of its stopper). Also what was left out, as `joint:kind` with the figures.
+#[must_use]
+pub fn unreached_stops(truth: &GapTruth, report: &GapReport) -> (GapTruth, Vec<String>) {
+    let extremes: BTreeMap<&str, (f64, f64)> = report
+        .series
+        .iter()
+        .map(|s| {
+            let span =
+                s.measured.iter().filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+            (s.joint.as_str(), span)
+        })
+        .collect();
+    let mut kept = truth.clone();
+    let mut left = Vec::new();
+    kept.effects.retain(|e| {
+        let (Some(&p), Some(&(lo, hi))) = (e.params.get("position"), extremes.get(e.joint.as_str())) else { return true };
+        let reach = STOP_REACH_SHARE * (hi - lo).max(0.0);
+        if e.kind != "end_stop" || hi < lo || (lo - reach..=hi + reach).contains(&p) {
+            return true;
+        }
+        left.push(format!("{}:end_stop at {p:.4}, never reached (measured {lo:.4} to {hi:.4})", e.joint));
+        false
+    });
+    (kept, left)
+}
+
 /// Scores a report against the truth; `ranges` is [`motion_ranges`] of the report.
 #[must_use]
 pub fn score(truth: &GapTruth, report: &GapReport, ranges: &BTreeMap<String, f64>) -> CaseScore {
@@ -384,6 +416,9 @@ pub struct CaseResult {
     pub score: Option<CaseScore>,
     /// Why the case failed.
     pub error: Option<String>,
+    /// Truth effects the recorded motion cannot show, with why; not scored ([`unreached_stops`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unobservable: Vec<String>,
 }
 
 impl CaseResult {
@@ -406,8 +441,17 @@ impl CaseResult {
 #[must_use]
 pub fn run_case(dir: &Path, cfg: &GapConfig) -> CaseResult {
     let case = dir.file_name().map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into_owned());
-    let mut result =
-        CaseResult { case, engine: String::new(), truth: None, truth_params: 0, found: Vec::new(), seconds: 0.0, score: None, error: None };
+    let mut result = CaseResult {
+        case,
+        engine: String::new(),
+        truth: None,
+        truth_params: 0,
+        found: Vec::new(),
+        seconds: 0.0,
+        score: None,
+        error: None,
+        unobservable: Vec::new(),
+    };
     let truth = match read_truth(&dir.join("truth.json")) {
         Ok(t) => t,
         Err(e) => {
@@ -424,6 +468,10 @@ pub fn run_case(dir: &Path, cfg: &GapConfig) -> CaseResult {
     match analysed {
         Ok(report) => {
             result.found = report.effects.iter().map(|e| format!("{}:{}", e.joint, e.kind)).collect();
+            let (truth, unobservable) = unreached_stops(&truth, &report);
+            result.truth = Some(truth.labels());
+            result.truth_params = truth.effects.iter().map(|e| e.params.len()).sum();
+            result.unobservable = unobservable;
             result.score = Some(score(&truth, &report, &motion_ranges(&report)));
         }
         Err(e) => result.error = Some(e.to_string()),
@@ -767,6 +815,14 @@ impl GapBenchReport {
                 let _ = writeln!(out, "- {}: {}", c.case, c.error.as_deref().unwrap_or_default());
             }
         }
+        let unobservable: Vec<&CaseResult> = self.cases.iter().filter(|c| !c.unobservable.is_empty()).collect();
+        if !unobservable.is_empty() {
+            out.push('\n');
+            out.push_str(&h("Not scored (the recording cannot show them)"));
+            for c in unobservable {
+                let _ = writeln!(out, "- {}: {}", c.case, c.unobservable.join("; "));
+            }
+        }
         out.push('\n');
         out.push_str(&h("Summary"));
         out.push_str(&table(&["measure", "value"], &self.summary.rows(), markdown));
@@ -1009,6 +1065,7 @@ mod tests {
             seconds: 1.0,
             score: Some(score(&truth, &report(&input), &BTreeMap::new())),
             error: None,
+            unobservable: Vec::new(),
         };
         let failed = CaseResult { case: "b".into(), score: None, error: Some("b/recording.csv: bad".into()), seconds: 0.5, ..ok.clone() };
         let s = GapBenchSummary::of(&[ok, failed]);
@@ -1018,5 +1075,45 @@ mod tests {
         assert_eq!(bins, [(0, 0), (1, 0), (0, 0), (1, 1)]);
         let req = Requirements { kinds_exact: Some(0.5), no_errors: true, ..Requirements::default() };
         assert_eq!(req.unmet(&s), ["kinds exact 0.0 % < required 50.0 %", "1 cases failed"]);
+    }
+
+    /// The truth effects left after dropping the stops a joint measured over `measured` never
+    /// reaches, and what was dropped.
+    fn check_reached(truth: &str, measured: &[f64], kept: &[&str], dropped: usize) {
+        let truth = parse_truth(truth, Path::new("truth.json")).unwrap();
+        let mut report = report(&NO_INPUT);
+        report.series.push(super::super::report::JointSeries {
+            joint: "slide".into(),
+            unit: "m",
+            time_s: (0..measured.len()).map(|i| i as f64).collect(),
+            measured: measured.to_vec(),
+            simulated_before: Vec::new(),
+            simulated_after: Vec::new(),
+            residual_before: Vec::new(),
+            residual_after: Vec::new(),
+            noise_sigma: 0.0,
+        });
+        let (left, why) = unreached_stops(&truth, &report);
+        assert_eq!(left.labels(), kept);
+        assert_eq!(why.len(), dropped, "{why:?}");
+    }
+
+    #[test]
+    fn a_stop_the_motion_never_reaches_is_not_scored() {
+        // Regression: Bullet's door at seed 1 was pushed toward targets that all stayed short of
+        // its added stopper (1.18 rad of 1.3): the recording was the same with and without it,
+        // and the case counted as a miss.
+        const TWO: &str = r#"{"format": "partscene-gap-truth/1", "joints": ["slide"], "effects": [
+            {"joint": "slide", "kind": "end_stop", "params": {"position": 0.30, "restitution": 0.2}},
+            {"joint": "slide", "kind": "viscous_damping", "params": {"damping": 2.0}}]}"#;
+        const LOW: &str = r#"{"format": "partscene-gap-truth/1", "joints": ["slide"], "effects": [
+            {"joint": "slide", "kind": "end_stop", "params": {"position": 0.02, "restitution": 0.0}}]}"#;
+        check_reached(TWO, &[0.05, 0.2, 0.27, f64::NAN], &["slide:viscous_damping"], 1);
+        // Reached (within 1 % of the range: 0.0025 m), or pressed a little past: scored.
+        check_reached(TWO, &[0.05, 0.2, 0.298], &["slide:end_stop", "slide:viscous_damping"], 0);
+        check_reached(TWO, &[0.05, 0.2, 0.301], &["slide:end_stop", "slide:viscous_damping"], 0);
+        // A lower stop alike; a joint with no measured motion keeps its truth.
+        check_reached(LOW, &[0.1, 0.3], &[], 1);
+        check_reached(LOW, &[f64::NAN], &["slide:end_stop"], 0);
     }
 }

@@ -294,6 +294,9 @@ struct Candidate {
     columns: Vec<usize>,
     /// Candidates of one family replace each other (one friction law per joint…).
     family: Family,
+    /// Why the recording cannot tell this law from another, when it cannot (then it is never
+    /// reported): a Stribeck law whose speeds the joint only passes through where it turns.
+    unresolved: Option<String>,
 }
 
 impl Candidate {
@@ -730,6 +733,34 @@ pub fn robust_scale(v: &[f64]) -> f64 {
 const TRANSITION_GRID: [f64; 5] = [0.002, 0.01, 0.03, 0.1, 0.3];
 /// Multipliers of the RMS speed for the Stribeck speeds tried.
 const STRIBECK_GRID: [f64; 3] = [0.05, 0.15, 0.4];
+/// Where a Stribeck law departs from its base law while the joint slides: from this many
+/// transition speeds (the base law is at its full level there) to this many Stribeck speeds
+/// (the excess is under 2 % of the break-away beyond).
+const STRIBECK_ZONE: (f64, f64) = (3.0, 2.0);
+
+/// Whether dof `d` slides one way with a smoothed speed inside `zone` (low, high; absolute)
+/// over used samples (`ok`) for at least the equation filter's support at a stretch.
+fn slides_within(sig: &Signals, d: usize, ok: &[bool], zone: (f64, f64)) -> bool {
+    let span_s = sig.band.support_s();
+    // Start time and direction of the current stretch.
+    let mut start: Option<(f64, bool)> = None;
+    for (i, &used) in ok.iter().enumerate() {
+        let v = sig.q[d][i][1];
+        let inside = used && (zone.0..=zone.1).contains(&v.abs());
+        start = match start {
+            Some((t0, forward)) if inside && (v > 0.0) == forward => {
+                if sig.time_s[i] - t0 >= span_s {
+                    return true;
+                }
+                Some((t0, forward))
+            }
+            _ if inside => Some((sig.time_s[i], v > 0.0)),
+            _ => None,
+        };
+    }
+    false
+}
+
 /// Shares of the travel from the closed end for the soft-close engage positions tried.
 const ENGAGE_GRID: [f64; 5] = [0.1, 0.2, 0.35, 0.5, 0.7];
 
@@ -741,7 +772,7 @@ impl EffortProblem<'_> {
 
     fn push(&mut self, row: usize, kind: EffectKind, family: Family, hyper: Vec<f64>, asymmetric: bool, cols: Vec<(Vec<f64>, Vec<f64>)>) {
         let columns = cols.into_iter().map(|c| self.push_column(row, c)).collect();
-        self.candidates.push(Candidate { row, kind, hyper, asymmetric, columns, family });
+        self.candidates.push(Candidate { row, kind, hyper, asymmetric, columns, family, unresolved: None });
     }
 
     /// The dry-friction candidates of row r (`ok`: its used samples; `v_rms`: its RMS speed):
@@ -759,6 +790,13 @@ impl EffortProblem<'_> {
     /// smoothed one alone.
     /// So each law is a candidate both ways, one family: the held-out error picks the reading,
     /// and on a tie the narrow one, which comes first.
+    ///
+    /// A Stribeck law departs from its base law only at low speed, which an excited joint passes
+    /// through where it turns; there dry friction that holds the joint for a moment (any level up
+    /// to its own) looks like a break-away once filtered (`MuJoCo`'s friction loss on a `UR5e` named
+    /// 1.5 N·m of Coulomb friction a Stribeck law breaking away at 2.3). So a Stribeck law is
+    /// named only where the joint also slides at its low speeds for the filter's span at a
+    /// stretch ([`slides_within`], [`STRIBECK_ZONE`]).
     fn push_dry_friction(&mut self, r: usize, sig: &Signals, ok: &[bool], v_rms: f64) {
         let (d, n) = (self.rows[r].dof, sig.time_s.len());
         let dry = |smoothed: bool, f: &dyn Fn([f64; 3]) -> f64| -> (Vec<f64>, Vec<f64>) {
@@ -779,6 +817,18 @@ impl EffortProblem<'_> {
                 let base = dry(smoothed, &|x| (x[1] / vt).tanh());
                 let extra = dry(smoothed, &|x| (-(x[1] / ss).powi(2)).exp() * (x[1] / vt).tanh());
                 self.push(r, EffectKind::StribeckFriction, Family::Friction, vec![ss], false, vec![base, extra]);
+                let zone = (STRIBECK_ZONE.0 * vt, STRIBECK_ZONE.1 * ss);
+                if let Some(last) = self.candidates.last_mut().filter(|_| !slides_within(sig, d, ok, zone)) {
+                    last.unresolved = Some(format!(
+                        "the joint never slides between {:.3} and {:.3} {} for {:.2} s at a stretch (the span the efforts are \
+                         filtered over), only passes those speeds where it turns: a break-away there cannot be told from dry \
+                         friction holding the joint while it turns",
+                        zone.0,
+                        zone.1,
+                        if self.model.joints[self.rows[r].joint].kind.is_rotational() { "rad/s" } else { "m/s" },
+                        sig.band.support_s()
+                    ));
+                }
             }
         }
     }
@@ -857,6 +907,7 @@ impl EffortProblem<'_> {
             asymmetric: false,
             columns: vec![self.columns.len() - 1],
             family: Family::Mass,
+            unresolved: None,
         })
     }
 
@@ -1130,6 +1181,9 @@ impl EffortProblem<'_> {
     /// Whether the fitted parameters of candidate c are physical (a heavier part within the
     /// plausible range, non-negative friction and damping levels).
     fn plausible(&self, c: usize, theta: &BTreeMap<usize, f64>) -> bool {
+        if self.candidates[c].unresolved.is_some() {
+            return false;
+        }
         let e = self.effect_of(c, theta);
         let (lo, hi) = self.rules.mass_scale_range;
         match e.kind {
@@ -1709,6 +1763,8 @@ impl EffortProblem<'_> {
     fn rejection_reason(&self, chosen: &[usize], fitted: &Evaluation, v: Verdict, c: usize) -> String {
         if let Some(why) = self.look_alike(chosen, fitted, c) {
             why
+        } else if let Some(why) = &self.candidates[c].unresolved {
+            why.clone()
         } else if !v.plausible {
             format!(
                 "its fitted parameters are not physical or not material (a negative level; a part within 10 % of, or far from, its modelled weight; a break-away beyond {}× the sliding friction)",
@@ -1804,5 +1860,30 @@ mod tests {
         // Without dry friction nothing changes.
         let damping = Effect { kind: EffectKind::ViscousDamping, params: vec![1.0], blocks_upward: false };
         check_at_rest(vec![damping], &[4.0, -5.0], &[0.0, 0.0], &[4.0, -5.0]);
+    }
+
+    /// Whether a joint moving as `position(t)` (200 Hz, 10 s) slides within `zone` for the
+    /// filter's span at a stretch.
+    fn check_slides(position: &dyn Fn(f64) -> f64, zone: (f64, f64), expected: bool) {
+        let time_s: Vec<f64> = (0..2000).map(|i| f64::from(i) / 200.0).collect();
+        let q = vec![time_s.iter().map(|&t| position(t)).collect::<Vec<f64>>()];
+        let band = bandwidth(&time_s, &q, 0.05, 5.0);
+        let sig = signals(&time_s, &q, &[None], &band);
+        assert_eq!(slides_within(&sig, 0, &sig.usable, zone), expected, "zone {zone:?}, span {} s", band.support_s());
+    }
+
+    #[test]
+    fn a_stribeck_law_needs_slow_sliding_not_only_turns() {
+        // Regression: MuJoCo's friction loss on a UR5e's elbow, an exact Coulomb law that holds
+        // the joint a moment where it turns, was named a Stribeck law breaking away at 1.5× its
+        // level; the multisine only passed through the low speeds at its turns.
+        let swing = |t: f64| 0.8 * (1.3 * t).sin() + 0.3 * (3.1 * t).sin();
+        check_slides(&swing, (0.015, 0.05), false);
+        // A slow pull at 0.03 rad/s for 2 s between two swings slides there.
+        let pull = |t: f64| if t < 4.0 { 0.5 * (1.3 * t).sin() } else { 0.5 * (5.2_f64).sin() + 0.03 * (t - 4.0).min(2.0) };
+        check_slides(&pull, (0.015, 0.05), true);
+        // The same pull backwards, and not at speeds outside the zone.
+        check_slides(&|t| -pull(t), (0.015, 0.05), true);
+        check_slides(&pull, (0.05, 0.2), false);
     }
 }
