@@ -240,18 +240,24 @@ impl CaseScore {
     }
 }
 
-/// Range of each joint's measured motion (finite samples of the report's series).
-#[must_use]
-pub fn motion_ranges(report: &GapReport) -> BTreeMap<String, f64> {
+/// Lowest and highest position of each joint's measured motion (finite samples of the report's
+/// series; +∞, −∞ without any).
+fn motion_extremes(report: &GapReport) -> BTreeMap<&str, (f64, f64)> {
     report
         .series
         .iter()
         .map(|s| {
-            let (lo, hi) =
+            let span =
                 s.measured.iter().filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
-            (s.joint.clone(), if hi >= lo { hi - lo } else { 0.0 })
+            (s.joint.as_str(), span)
         })
         .collect()
+}
+
+/// Range of each joint's measured motion (finite samples of the report's series).
+#[must_use]
+pub fn motion_ranges(report: &GapReport) -> BTreeMap<String, f64> {
+    motion_extremes(report).into_iter().map(|(joint, (lo, hi))| (joint.to_owned(), if hi >= lo { hi - lo } else { 0.0 })).collect()
 }
 
 /// Share of a joint's measured range within which its motion counts as reaching a truth end stop.
@@ -263,15 +269,7 @@ pub const STOP_REACH_SHARE: f64 = 0.01;
 /// stayed short of its stopper). Also what was left out, as `joint:kind` with the figures.
 #[must_use]
 pub fn unreached_stops(truth: &GapTruth, report: &GapReport) -> (GapTruth, Vec<String>) {
-    let extremes: BTreeMap<&str, (f64, f64)> = report
-        .series
-        .iter()
-        .map(|s| {
-            let span =
-                s.measured.iter().filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
-            (s.joint.as_str(), span)
-        })
-        .collect();
+    let extremes = motion_extremes(report);
     let mut kept = truth.clone();
     let mut left = Vec::new();
     kept.effects.retain(|e| {

@@ -267,15 +267,19 @@ impl Signals {
     /// A term of the equation of motion evaluated at every sample from the narrowly
     /// differentiated positions of dof `d`, then filtered like the efforts; NaN outside `keep`.
     fn term(&self, d: usize, keep: &[bool], f: &dyn Fn([f64; 3]) -> f64) -> Vec<f64> {
-        let values: Vec<f64> = self.raw[d].iter().map(|&x| if x.iter().all(|v| v.is_finite()) { f(x) } else { f64::NAN }).collect();
-        self.filter.apply(&values).into_iter().zip(keep).map(|(v, &k)| if k { v } else { f64::NAN }).collect()
+        self.filtered(&self.raw[d], keep, f)
     }
 
     /// A term evaluated on dof `d`'s smoothed motion (`q`) instead, then filtered like the
     /// efforts; NaN outside `keep`. Dry friction is read both ways ([`EffortProblem`]'s friction
     /// candidates).
     fn motion_term(&self, d: usize, keep: &[bool], f: &dyn Fn([f64; 3]) -> f64) -> Vec<f64> {
-        let values: Vec<f64> = self.q[d].iter().map(|&x| if x.iter().all(|v| v.is_finite()) { f(x) } else { f64::NAN }).collect();
+        self.filtered(&self.q[d], keep, f)
+    }
+
+    /// `f` of each sample of `motion`, filtered like the efforts; NaN outside `keep`.
+    fn filtered(&self, motion: &[[f64; 3]], keep: &[bool], f: &dyn Fn([f64; 3]) -> f64) -> Vec<f64> {
+        let values: Vec<f64> = motion.iter().map(|&x| if x.iter().all(|v| v.is_finite()) { f(x) } else { f64::NAN }).collect();
         self.filter.apply(&values).into_iter().zip(keep).map(|(v, &k)| if k { v } else { f64::NAN }).collect()
     }
 }
@@ -803,6 +807,25 @@ impl EffortProblem<'_> {
             let values = if smoothed { sig.motion_term(d, ok, f) } else { sig.term(d, ok, f) };
             (values, (0..n).map(|i| if ok[i] { f(sig.q[d][i]) } else { f64::NAN }).collect())
         };
+        let vt = TRANSITION_GRID[1] * v_rms;
+        let unit = if self.model.joints[self.rows[r].joint].kind.is_rotational() { "rad/s" } else { "m/s" };
+        // Per Stribeck speed, why the recording cannot tell its law (either reading) from Coulomb's.
+        let unresolved: Vec<Option<String>> = STRIBECK_GRID
+            .iter()
+            .map(|&m| {
+                let zone = (STRIBECK_ZONE.0 * vt, STRIBECK_ZONE.1 * m * v_rms);
+                (!slides_within(sig, d, ok, zone)).then(|| {
+                    format!(
+                        "the joint never slides between {:.3} and {:.3} {unit} for {:.2} s at a stretch (the span the efforts \
+                         are filtered over), only passes those speeds where it turns: a break-away there cannot be told from \
+                         dry friction holding the joint while it turns",
+                        zone.0,
+                        zone.1,
+                        sig.band.support_s()
+                    )
+                })
+            })
+            .collect();
         for smoothed in [false, true] {
             for m in TRANSITION_GRID {
                 let vs = m * v_rms;
@@ -811,23 +834,13 @@ impl EffortProblem<'_> {
                 let neg = dry(smoothed, &|x| if x[1] < 0.0 { (x[1] / vs).tanh() } else { 0.0 });
                 self.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], true, vec![pos, neg]);
             }
-            let vt = TRANSITION_GRID[1] * v_rms;
-            for m in STRIBECK_GRID {
+            for (m, why) in STRIBECK_GRID.iter().zip(&unresolved) {
                 let ss = m * v_rms;
                 let base = dry(smoothed, &|x| (x[1] / vt).tanh());
                 let extra = dry(smoothed, &|x| (-(x[1] / ss).powi(2)).exp() * (x[1] / vt).tanh());
                 self.push(r, EffectKind::StribeckFriction, Family::Friction, vec![ss], false, vec![base, extra]);
-                let zone = (STRIBECK_ZONE.0 * vt, STRIBECK_ZONE.1 * ss);
-                if let Some(last) = self.candidates.last_mut().filter(|_| !slides_within(sig, d, ok, zone)) {
-                    last.unresolved = Some(format!(
-                        "the joint never slides between {:.3} and {:.3} {} for {:.2} s at a stretch (the span the efforts are \
-                         filtered over), only passes those speeds where it turns: a break-away there cannot be told from dry \
-                         friction holding the joint while it turns",
-                        zone.0,
-                        zone.1,
-                        if self.model.joints[self.rows[r].joint].kind.is_rotational() { "rad/s" } else { "m/s" },
-                        sig.band.support_s()
-                    ));
+                if let Some(last) = self.candidates.last_mut() {
+                    last.unresolved.clone_from(why);
                 }
             }
         }
@@ -1474,7 +1487,8 @@ impl EffortProblem<'_> {
     fn best_step(&self, chosen: &[usize], current: &Evaluation, banned: &[bool], whole_refinements: bool) -> Option<(usize, Evaluation)> {
         let mut best: Option<(usize, Verdict, Evaluation)> = None;
         for (c, &ban) in banned.iter().enumerate() {
-            if ban || chosen.contains(&c) || self.may_enter(chosen, c) == whole_refinements {
+            // An unresolved law never passes (`plausible`): not worth its evaluation.
+            if ban || chosen.contains(&c) || self.candidates[c].unresolved.is_some() || self.may_enter(chosen, c) == whole_refinements {
                 continue;
             }
             let e = self.evaluate(&self.with(chosen, c));
