@@ -49,7 +49,9 @@ pub struct SelectionRules {
     /// Least cut of a chain's held-out replay error (the mean over its joints of each one's
     /// squared error relative to the model as written) for which the other reading of a joint's
     /// friction (dry friction for viscous damping, or the reverse) replaces the one effort space
-    /// chose: a clear improvement of the predicted motion, not a tie broken by noise.
+    /// chose: a clear improvement of the predicted motion, not a tie broken by noise. Also the
+    /// least cut of a lone joint's squared replay error for which an output-error refinement the
+    /// efforts contradict replaces their reading ([`crate::gap`]'s `refine_given`).
     pub min_replay_gain: f64,
     /// Smallest change of a part's weight worth reporting (documented masses are rarely better
     /// than this): a 4 % heavier part is the model's accuracy, not missing physics.
@@ -430,7 +432,7 @@ impl JointFinding {
     /// The static level and the speed below which the joint counts as at rest, of the dry
     /// friction found on it (`coulomb_friction`: the larger of its two levels within its
     /// transition speed; `stribeck_friction`: its break-away within its Stribeck speed).
-    fn friction_at_rest(&self) -> Option<(f64, f64)> {
+    pub(super) fn friction_at_rest(&self) -> Option<(f64, f64)> {
         self.effects.iter().find_map(|e| match e.kind {
             EffectKind::CoulombFriction => Some((e.params[0].max(e.params[2].abs()).max(0.0), e.params[1])),
             EffectKind::StribeckFriction => Some((e.params[0].max(e.params[1]).max(0.0), e.params[2])),

@@ -184,10 +184,14 @@ fn effects_by_joint(findings: &[JointFinding]) -> BTreeMap<usize, Vec<Effect>> {
 }
 
 /// The findings of `terms` in `problem`, with the unmodelled stops found per row.
+/// A stop whose push the joint's dry friction could hold by itself ([`FoundStop::beyond`]) is
+/// not reported: friction holds a joint wherever it rests, a stop only at its position.
 fn findings_with_stops(problem: &EffortProblem<'_>, terms: &Terms, stops: &[Vec<FoundStop>]) -> Vec<JointFinding> {
     let mut findings = problem.findings(terms);
+    let rules = StopRules::default();
     for (f, found) in findings.iter_mut().zip(stops) {
-        for stop in found {
+        let (held, effort_rms) = (f.friction_at_rest().map_or(0.0, |(level, _)| level), f.effort_rms);
+        for stop in found.iter().filter(|s| s.beyond(held, effort_rms, &rules)) {
             add_stop(f, stop);
         }
     }
@@ -481,6 +485,7 @@ pub(super) fn analyze_effort_space(
                 f.joint,
                 Given {
                     effects: f.effects.clone(),
+                    param_std: f.param_std.clone(),
                     confidence: f.confidence.clone(),
                     extra: outcome.effects.into_iter().filter(|e| e.kind == EffectKind::Unknown.name()).collect(),
                     effort_unexplained: smooth_law_unexplained,

@@ -335,6 +335,8 @@ fn analyze_joint(
         (s.chosen, s.confidence, s.rejected)
     };
     let mut fell_back = false;
+    // Whether output error contradicted effort space's reading ([`refine_given`]).
+    let mut contradicted = false;
     let (chosen, confidence, mut rejected_here) = match given {
         // A joint whose replay is already within its noise floor gets no effects, whatever the
         // effort space saw (a joint at rest tells nothing about its physics).
@@ -343,15 +345,21 @@ fn analyze_joint(
         // motion is still far from explained (effort space could not see an effect that acts
         // mostly near a stop, say), the terms are chosen here instead.
         Some(g) => {
-            let mut refined = if g.effects.is_empty() { nominal.clone() } else { refine_from_bounces(&problem, &g.effects) };
+            let (mut refined, contradiction) = refine_given(&problem, &nominal, g, (&terms, &derivs, &effort));
+            // Where output error contradicted the efforts, the joint's simulation is what
+            // disagrees with them (how it meets its stops or sticks): it does not choose the
+            // terms again, nor swap a heavier part for a rotor's inertia.
+            contradicted = contradiction.is_some();
+            let mut dropped: Vec<String> = contradiction.into_iter().collect();
             // The refined levels face the same rules as in effort space: a weight change that
             // shrank below materiality, or a level the refinement cannot tell from none (within
             // two σ of it), is dropped, one at a time, and the rest refitted.
             let rules = effort::SelectionRules::default();
-            let mut dropped = Vec::new();
-            while let Some(k) =
-                (0..refined.effects.len()).find(|&k| not_material(&refined.effects[k], &refined.param_std[k], &rules, stop_span))
-            {
+            // (Levels held at effort space's reading are not refined, and were judged there.)
+            while let Some(k) = (0..refined.effects.len()).find(|&k| {
+                let held = contradicted && !unseen_in_effort(refined.effects[k].kind);
+                !held && not_material(&refined.effects[k], &refined.param_std[k], &rules, stop_span)
+            }) {
                 dropped.push(format!(
                     "{}: refined to {} ± {} on the measured positions — not told from none (a stop: not located within the motion), not reported",
                     refined.effects[k].kind.name(),
@@ -360,7 +368,13 @@ fn analyze_joint(
                 ));
                 let mut rest = refined.effects.clone();
                 rest.remove(k);
-                refined = if rest.is_empty() { nominal.clone() } else { fit::fit(&problem, &rest, Some(&free_mask(&rest)), None, 25) };
+                refined = if rest.is_empty() {
+                    nominal.clone()
+                } else if contradicted {
+                    held_at_effort_reading(&problem, &rest, g)
+                } else {
+                    fit::fit(&problem, &rest, Some(&free_mask(&rest)), None, 25)
+                };
             }
             let physics = JointPhysics::with_effects(joint, &refined.effects);
             let left = fit::segment_residual(&problem, &physics, &refined.states);
@@ -377,7 +391,8 @@ fn analyze_joint(
             // against our hard ones), not from missing physics.
             let effort_unexplained = g.effort_unexplained;
             let alternative =
-                (effort_unexplained && !spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma).then(select_here);
+                (effort_unexplained && !contradicted && !spans.is_empty() && unexplained && worst >= UNKNOWN_SIGMAS_AFTER_EFFORT * sigma)
+                    .then(select_here);
             // The alternative must prove itself on data it was not fitted to.
             let better = alternative.as_ref().is_some_and(|(alt, _, _)| {
                 let mine = held_out::held_out(rec, input, y, sigma, joint, &refined.effects, t_split).rmse_after;
@@ -410,7 +425,9 @@ fn analyze_joint(
                 // Stops act only at their position: their size is judged where they are found.
                 let sized = !matches!(e.kind, EffectKind::EndStop | EffectKind::Unknown);
                 let share = if sized { effort_share(e, joint, &terms, &derivs, &effort) } else { 1.0 };
-                let keep = !not_material(e, sd, &rules, stop_span) && share >= rules.min_effort_share;
+                // Levels held at effort space's reading were judged there, by its own rules.
+                let judged = contradicted && !unseen_in_effort(e.kind);
+                let keep = (judged || !not_material(e, sd, &rules, stop_span)) && share >= rules.min_effort_share;
                 if !keep {
                     rejected_here.push(format!(
                         "{}: fitted to {} ({:.1} % of the joint's own effort) — not material, not reported",
@@ -459,7 +476,7 @@ fn analyze_joint(
     } else {
         (chosen, confidence)
     };
-    let chosen = match inertia_alone(&problem, &chosen) {
+    let chosen = match inertia_alone(&problem, &chosen).filter(|_| !contradicted) {
         Some((armature, note)) => {
             rejected_here.push(note);
             armature
@@ -596,7 +613,22 @@ fn mostly_at_a_stop(joint: &model::GapJoint, y: &[f64], span: Span) -> bool {
 /// on a passive joint, gravity itself): the practical size a term found in position space must
 /// have, measured as effort space measures it.
 fn effort_share(e: &Effect, joint: &model::GapJoint, terms: &[model::JointTerms], derivs: &[[f64; 3]], applied: &[f64]) -> f64 {
-    let (with, without) = (JointPhysics::with_effects(joint, std::slice::from_ref(e)), JointPhysics::nominal(joint));
+    change_share(std::slice::from_ref(e), &[], joint, terms, derivs, applied)
+}
+
+/// The RMS difference between the efforts effects `a` and effects `b` add to the model joint
+/// along the measured motion, as a share of the joint's own effort (its inertial and coupling
+/// effort, or its applied effort less gravity, whichever is larger). End stops act only where
+/// they are, and add nothing here.
+fn change_share(
+    a: &[Effect],
+    b: &[Effect],
+    joint: &model::GapJoint,
+    terms: &[model::JointTerms],
+    derivs: &[[f64; 3]],
+    applied: &[f64],
+) -> f64 {
+    let (with_a, with_b) = (JointPhysics::with_effects(joint, a), JointPhysics::with_effects(joint, b));
     let extra = |p: &JointPhysics, t: &model::JointTerms, [q, v, a]: [f64; 3]| {
         let friction = if p.friction_shape.transition_speed > 0.0 { p.smooth_friction(v) } else { -p.friction_level(v) * v.signum() };
         let inertia = (p.mass_scale - 1.0) * (t.inertia * a - t.gravity(q)) + p.armature * a;
@@ -608,7 +640,7 @@ fn effort_share(e: &Effect, joint: &model::GapJoint, terms: &[model::JointTerms]
         if !d.iter().all(|x| x.is_finite()) {
             continue;
         }
-        let size = extra(&with, t, *d) - extra(&without, t, *d);
+        let size = extra(&with_a, t, *d) - extra(&with_b, t, *d);
         term += size * size;
         own += (t.inertia * d[2] + t.coupling).powi(2);
         own_applied += (if u.is_finite() { *u } else { 0.0 } - t.gravity(d[0])).powi(2);
@@ -649,6 +681,8 @@ fn not_material(e: &Effect, std: &[f64], rules: &effort::SelectionRules, range: 
 struct Given {
     /// The structure and starting parameters.
     effects: Vec<Effect>,
+    /// One σ of each effect's parameters in effort space (jackknife over its folds).
+    param_std: Vec<Vec<f64>>,
     /// Confidence from effort space.
     confidence: Vec<f64>,
     /// Reports that stay as effort space gave them (`unknown`).
@@ -660,8 +694,6 @@ struct Given {
     analysis: report::JointAnalysis,
 }
 
-/// Which parameters output error refines: the levels, not the shape parameters effort space
-/// chose on its grid (transition and Stribeck speeds), nor parameters that are absent (NaN).
 /// The spec's rule in position space: a heavier part (`mass_scale`) is inertia and weight
 /// together, inertia alone is `armature`. Where the fit with a rotor's inertia in place of the
 /// heavier part is as good (cost within [`effort::LOOK_ALIKE_SSE_SHARE`]: gravity does no work
@@ -698,9 +730,8 @@ const STOP_RESTITUTION_STARTS: [f64; 3] = [0.3, 0.6, 0.9];
 /// from short impacts sees nothing of a compliant stop that holds the joint for tens of
 /// milliseconds and throws it back at 0.6–0.9 of its speed (a penalty-spring limit): from 0 the
 /// refinement stayed at 0 on such a door.
-fn refine_from_bounces(problem: &fit::Problem<'_>, effects: &[Effect]) -> fit::FitResult {
-    let mask = free_mask(effects);
-    let mut best = fit::fit(problem, effects, Some(&mask), None, 25);
+fn refine_from_bounces(problem: &fit::Problem<'_>, effects: &[Effect], mask: &[Vec<bool>]) -> fit::FitResult {
+    let mut best = fit::fit(problem, effects, Some(mask), None, 25);
     if !effects.iter().any(|e| e.kind == EffectKind::EndStop) {
         return best;
     }
@@ -715,12 +746,105 @@ fn refine_from_bounces(problem: &fit::Problem<'_>, effects: &[Effect]) -> fit::F
                 e
             })
             .collect();
-        let fitted = fit::fit(problem, &start, Some(&mask), None, 25);
+        let fitted = fit::fit(problem, &start, Some(mask), None, 25);
         if fitted.cost < best.cost * (1.0 - 1e-9) {
             best = fitted;
         }
     }
     best
+}
+
+/// Effort space's effects refined by output error on the measured positions, with what the
+/// refinement said (a line for the report's `rejected`, or none).
+///
+/// Output error refines the levels effort space read; it does not read the physics again. Its
+/// cost, on a joint that bounces off its stops or is pushed against them, has valleys far from
+/// the efforts' reading: a lid with a damper and a heavier panel, read in effort space as
+/// 0.200 N·m·s/rad and ×1.301 (a recording by `JaxSim`; truth 0.2 and ×1.3), was "refined" to 1.76
+/// and ×0.50, and the real DFKI pendulum's Coulomb level from 0.22 to 0.15 N·m (published 0.29),
+/// each replaying the recording worse. Where the refined effects add an effort that differs
+/// from effort space's along the measured motion by a material share of the joint's own
+/// ([`effort::SelectionRules::min_effort_share`], the share below which an effect is too small
+/// to matter), the two readings disagree on what the joint does, not on a detail. The refined
+/// one is kept only if it replays the whole recording open loop (which multiple shooting does
+/// not fit) clearly better ([`effort::SelectionRules::min_replay_gain`]): dry friction that holds
+/// a drawer or a knob between pushes is read low by effort space's smooth law, and output error
+/// corrects it by a material share of a small effort, replaying the motion ten times better.
+/// Otherwise the reading that saw the efforts stands, its levels held with their effort-space
+/// σ, and only what effort space cannot see (an end stop's position and bounce) is refined.
+fn refine_given(
+    problem: &fit::Problem<'_>,
+    nominal: &fit::FitResult,
+    given: &Given,
+    (terms, derivs, applied): (&[model::JointTerms], &[[f64; 3]], &[f64]),
+) -> (fit::FitResult, Option<String>) {
+    if given.effects.is_empty() {
+        return (nominal.clone(), None);
+    }
+    let refined = refine_from_bounces(problem, &given.effects, &free_mask(&given.effects));
+    let moved = change_share(&refined.effects, &given.effects, problem.joint, terms, derivs, applied);
+    let rules = effort::SelectionRules::default();
+    if moved < rules.min_effort_share {
+        return (refined, None);
+    }
+    let held = held_at_effort_reading(problem, &given.effects, given);
+    let (theirs, mine) = (replay_rmse(problem, &refined), replay_rmse(problem, &held));
+    if theirs.powi(2) < (1.0 - rules.min_replay_gain) * mine.powi(2) {
+        return (refined, None);
+    }
+    let levels: Vec<String> = refined
+        .effects
+        .iter()
+        .filter(|e| !unseen_in_effort(e.kind))
+        .map(|e| format!("{} {}", e.kind.name(), e.params.first().map_or_else(String::new, |v| format!("{v:.4}"))))
+        .collect();
+    let unit = if problem.joint.kind.is_rotational() { "rad" } else { "m" };
+    let note = format!(
+        "output-error refinement: moved to {} ({:.0} % of the joint's own effort away from the efforts' reading), replaying the \
+         recording no clearly better ({theirs:.4} against {mine:.4} {unit}) — another reading the efforts contradict, not a \
+         refinement; effort space's levels kept",
+        levels.join(", "),
+        100.0 * moved
+    );
+    (held, Some(note))
+}
+
+/// Kinds effort space cannot see (it leaves the samples at a stop out), refined by output error
+/// even where the levels it read are held ([`held_at_effort_reading`]).
+fn unseen_in_effort(kind: EffectKind) -> bool {
+    matches!(kind, EffectKind::EndStop | EffectKind::Unknown)
+}
+
+/// `effects` (some of effort space's reading `given`) fitted by output error with the levels
+/// effort space read held, and their σ its jackknife σ: only what it cannot see is refined.
+fn held_at_effort_reading(problem: &fit::Problem<'_>, effects: &[Effect], given: &Given) -> fit::FitResult {
+    let mask: Vec<Vec<bool>> = free_mask(effects)
+        .into_iter()
+        .zip(effects)
+        .map(|(free, e)| free.into_iter().map(|f| f && unseen_in_effort(e.kind)).collect())
+        .collect();
+    let mut held = refine_from_bounces(problem, effects, &mask);
+    for ((e, sd), free) in held.effects.iter().zip(held.param_std.iter_mut()).zip(&mask) {
+        let read = given.effects.iter().position(|g| g.kind == e.kind).and_then(|k| given.param_std.get(k));
+        for (p, s) in sd.iter_mut().enumerate() {
+            if !free[p] {
+                *s = read.and_then(|r| r.get(p)).copied().unwrap_or(f64::NAN);
+            }
+        }
+    }
+    held
+}
+
+/// The RMS error of `fitted`'s open-loop replay of the whole recording from its first segment's
+/// state, the model's limits bouncing as the recording shows.
+fn replay_rmse(problem: &fit::Problem<'_>, fitted: &fit::FitResult) -> f64 {
+    let physics = JointPhysics::with_effects(problem.joint, &fitted.effects);
+    let start = problem.segments.first().map_or(0, |s| s.start);
+    let state = fitted.states.first().copied().unwrap_or((problem.y[start], 0.0));
+    let everywhere = vec![true; problem.y.len()];
+    let (sim, _) = held_out::replay_with_bounce(&problem.input, problem.y, &everywhere, problem.sigma, &physics, start, state);
+    let (sse, count) = rmse_mask(problem.y, &sim, |_| true);
+    (sse / count.max(1) as f64).sqrt()
 }
 
 /// Contact times a compliant stop's fit starts from, in sample intervals: a contact shorter than
@@ -782,6 +906,8 @@ fn compliant_stop(
     )))
 }
 
+/// Which parameters output error refines: the levels, not the shape parameters effort space
+/// chose on its grid (transition and Stribeck speeds), nor parameters that are absent (NaN).
 fn free_mask(effects: &[Effect]) -> Vec<Vec<bool>> {
     effects
         .iter()

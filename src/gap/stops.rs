@@ -36,8 +36,23 @@ pub struct FoundStop {
     pub contact: Vec<bool>,
     /// Mean push of the stop in contact (effort units).
     pub push: f64,
+    /// Robust scale of the residual away from contact (effort units).
+    pub scale: f64,
     /// Confidence from how far the push stands out.
     pub confidence: f64,
+}
+
+impl FoundStop {
+    /// Whether the push would still pass `rules` (against the residual's scale and the joint's
+    /// RMS effort `effort_rms`) with `held` taken off it: what dry friction of static level
+    /// `held` found on the joint could hold there by itself. A drawer that its friction holds
+    /// where a hand's push gives out rests at an extreme of its motion under a push, as one held
+    /// by a stop does (three engines' loaded drawers, each "stopped" at a different extreme).
+    #[must_use]
+    pub fn beyond(&self, held: f64, effort_rms: f64, rules: &StopRules) -> bool {
+        let push = self.push - held.max(0.0);
+        push >= rules.min_push_sigmas * self.scale && push >= rules.min_push_share * effort_rms
+    }
 }
 
 /// Looks for an unmodelled stop at each extreme of `y` (raw positions) with the nominal residual
@@ -87,6 +102,7 @@ pub fn find_stops(
             effect: Effect { kind: EffectKind::EndStop, params: vec![extreme, restitution], blocks_upward: upward },
             contact,
             push,
+            scale,
             confidence: (1.0 - (-(push / scale) / (2.0 * rules.min_push_sigmas)).exp()).clamp(0.0, 1.0),
         });
     }
@@ -136,6 +152,11 @@ mod tests {
     /// A joint swinging between 0.1 and 0.9 (turning points at both), its nominal residual
     /// `level` everywhere plus `push` at the upper extreme; how many stops are found.
     fn check(level: f64, push_at_top: f64, expected_stops: usize) {
+        check_held(level, push_at_top, 0.0, expected_stops);
+    }
+
+    /// As [`check`], with dry friction of static level `held` on the joint.
+    fn check_held(level: f64, push_at_top: f64, held: f64, expected_stops: usize) {
         let time_s: Vec<f64> = (0..2000).map(|i| f64::from(i) * 0.005).collect();
         let y: Vec<f64> = time_s.iter().map(|t| 0.5 + 0.4 * (t * 2.0).sin()).collect();
         let residual: Vec<f64> = y
@@ -143,11 +164,13 @@ mod tests {
             .enumerate()
             .map(|(i, &q)| level + 1e-3 * ((i * 7919) % 13) as f64 / 13.0 + if q > 0.9 - 0.004 { push_at_top } else { 0.0 })
             .collect();
-        let found = find_stops(&time_s, &y, &residual, 1.0, 1e-4, (Some(0.0), Some(2.0)), &StopRules::default());
+        let rules = StopRules::default();
+        let mut found = find_stops(&time_s, &y, &residual, 1.0, 1e-4, (Some(0.0), Some(2.0)), &rules);
+        found.retain(|s| s.beyond(held, 1.0, &rules));
         assert_eq!(
             found.len(),
             expected_stops,
-            "level {level}, push {push_at_top}: {:?}",
+            "level {level}, push {push_at_top}, friction {held}: {:?}",
             found.iter().map(|s| &s.effect).collect::<Vec<_>>()
         );
     }
@@ -166,5 +189,16 @@ mod tests {
         check(0.0, 1.0, 1);
         check(0.3, 1.0, 1);
         check(-0.3, 1.0, 1);
+    }
+
+    #[test]
+    fn a_push_its_friction_could_hold_is_no_stop() {
+        // Regression (loaded drawers with 6 N of dry friction in DART, Klamp't and JaxSim): a
+        // hand's push that gave out at an extreme of the motion left the drawer resting there
+        // under it, and a stop was named at that extreme.
+        check_held(0.0, 1.0, 1.0, 0);
+        check_held(0.0, 1.0, 2.0, 0);
+        check_held(0.0, 1.0, 0.5, 1);
+        check_held(0.0, 3.0, 1.0, 1);
     }
 }
