@@ -348,7 +348,7 @@ fn analyze_joint(
             let (mut refined, contradiction) = refine_given(&problem, &nominal, g, (&terms, &derivs, &effort));
             // Where output error contradicted the efforts, the joint's simulation is what
             // disagrees with them (how it meets its stops or sticks): it does not choose the
-            // terms again, nor swap a heavier part for a rotor's inertia.
+            // terms again.
             contradicted = contradiction.is_some();
             let mut dropped: Vec<String> = contradiction.into_iter().collect();
             // The refined levels face the same rules as in effort space: a weight change that
@@ -476,7 +476,10 @@ fn analyze_joint(
     } else {
         (chosen, confidence)
     };
-    let chosen = match inertia_alone(&problem, &chosen).filter(|_| !contradicted) {
+    // Effort space applied the rule itself to the terms it chose (`prefer_inertia_alone`), where
+    // it sees the weight: only terms chosen here face it here.
+    let chosen_here = given.is_none() || fell_back;
+    let chosen = match inertia_alone(&problem, &chosen).filter(|_| chosen_here) {
         Some((armature, note)) => {
             rejected_here.push(note);
             armature
@@ -761,15 +764,16 @@ fn refine_from_bounces(problem: &fit::Problem<'_>, effects: &[Effect], mask: &[V
 /// cost, on a joint that bounces off its stops or is pushed against them, has valleys far from
 /// the efforts' reading: a lid with a damper and a heavier panel, read in effort space as
 /// 0.200 N·m·s/rad and ×1.301 (a recording by `JaxSim`; truth 0.2 and ×1.3), was "refined" to 1.76
-/// and ×0.50, and the real DFKI pendulum's Coulomb level from 0.22 to 0.15 N·m (published 0.29),
-/// each replaying the recording worse. Where the refined effects add an effort that differs
+/// and ×0.50, and the real DFKI pendulum's (Coulomb 0.165 N·m, ×1.23, a rotor's inertia of
+/// 0.009 kg·m²) to 0.149, ×1.29 and 0.016, each replaying the recording worse. Where the refined effects add an effort that differs
 /// from effort space's along the measured motion by a material share of the joint's own
 /// ([`effort::SelectionRules::min_effort_share`], the share below which an effect is too small
 /// to matter), the two readings disagree on what the joint does, not on a detail. The refined
 /// one is kept only if it replays the whole recording open loop (which multiple shooting does
 /// not fit) clearly better ([`effort::SelectionRules::min_replay_gain`]): dry friction that holds
 /// a drawer or a knob between pushes is read low by effort space's smooth law, and output error
-/// corrects it by a material share of a small effort, replaying the motion ten times better.
+/// corrects it by a material share of a small effort, replaying the motion 8 to 2000 times
+/// better.
 /// Otherwise the reading that saw the efforts stands, its levels held with their effort-space
 /// σ, and only what effort space cannot see (an end stop's position and bounce) is refined.
 fn refine_given(
