@@ -832,8 +832,13 @@ fn efforts_of_the_opposite_sign_are_questioned_in_the_report() {
 
 /// The real recordings of `../shared/data/recordings/` (made by others on real hardware), or
 /// None with a loud skip when the shared data are absent.
+/// A real recording's folder in the shared data (which may be absent).
+fn shared_case_dir(case: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/recordings").join(case)
+}
+
 fn shared_recording(case: &str, file: &str) -> Option<(GapModel, partscene::gap::Recording)> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/recordings").join(case);
+    let dir = shared_case_dir(case);
     if !dir.is_dir() {
         eprintln!("SKIPPED: {} is absent (real recordings are read from the shared data)", dir.display());
         return None;
@@ -1043,7 +1048,7 @@ fn a_real_pendulums_reading_is_not_refined_into_one_that_replays_worse() {
     let held = &report.held_out.per_joint["shoulder"];
     assert!(held.rmse_after < 0.05, "held-out replay {} -> {} rad: {found:?}", held.rmse_before, held.rmse_after);
     // The published model: the same URDF with the reference's friction in `<dynamics>`.
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/recordings/dfki_pendulum");
+    let dir = shared_case_dir("dfki_pendulum");
     let reference: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("reference.json")).expect("reference")).expect("json");
     let level = |kind: &str, name: &str| {

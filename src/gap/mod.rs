@@ -423,10 +423,10 @@ fn analyze_joint(
             .zip(&chosen.param_std)
             .map(|(e, sd)| {
                 // Stops act only at their position: their size is judged where they are found.
-                let sized = !matches!(e.kind, EffectKind::EndStop | EffectKind::Unknown);
+                let sized = !unseen_in_effort(e.kind);
                 let share = if sized { effort_share(e, joint, &terms, &derivs, &effort) } else { 1.0 };
                 // Levels held at effort space's reading were judged there, by its own rules.
-                let judged = contradicted && !unseen_in_effort(e.kind);
+                let judged = contradicted && sized;
                 let keep = (judged || !not_material(e, sd, &rules, stop_span)) && share >= rules.min_effort_share;
                 if !keep {
                     rejected_here.push(format!(
@@ -479,7 +479,7 @@ fn analyze_joint(
     // Effort space applied the rule itself to the terms it chose (`prefer_inertia_alone`), where
     // it sees the weight: only terms chosen here face it here.
     let chosen_here = given.is_none() || fell_back;
-    let chosen = match inertia_alone(&problem, &chosen).filter(|_| chosen_here) {
+    let chosen = match chosen_here.then(|| inertia_alone(&problem, &chosen)).flatten() {
         Some((armature, note)) => {
             rejected_here.push(note);
             armature
@@ -765,17 +765,17 @@ fn refine_from_bounces(problem: &fit::Problem<'_>, effects: &[Effect], mask: &[V
 /// the efforts' reading: a lid with a damper and a heavier panel, read in effort space as
 /// 0.200 N·m·s/rad and ×1.301 (a recording by `JaxSim`; truth 0.2 and ×1.3), was "refined" to 1.76
 /// and ×0.50, and the real DFKI pendulum's (Coulomb 0.165 N·m, ×1.23, a rotor's inertia of
-/// 0.009 kg·m²) to 0.149, ×1.29 and 0.016, each replaying the recording worse. Where the refined effects add an effort that differs
-/// from effort space's along the measured motion by a material share of the joint's own
-/// ([`effort::SelectionRules::min_effort_share`], the share below which an effect is too small
-/// to matter), the two readings disagree on what the joint does, not on a detail. The refined
-/// one is kept only if it replays the whole recording open loop (which multiple shooting does
-/// not fit) clearly better ([`effort::SelectionRules::min_replay_gain`]): dry friction that holds
-/// a drawer or a knob between pushes is read low by effort space's smooth law, and output error
-/// corrects it by a material share of a small effort, replaying the motion 8 to 2000 times
-/// better.
-/// Otherwise the reading that saw the efforts stands, its levels held with their effort-space
-/// σ, and only what effort space cannot see (an end stop's position and bounce) is refined.
+/// 0.009 kg·m²) to 0.149, ×1.29 and 0.016, each replaying the recording worse. Where the refined
+/// effects add an effort that differs from effort space's along the measured motion by a
+/// material share of the joint's own ([`effort::SelectionRules::min_effort_share`], the share
+/// below which an effect is too small to matter), the two readings disagree on what the joint
+/// does, not on a detail. The refined one is kept only if it replays the whole recording open
+/// loop (which multiple shooting does not fit) clearly better
+/// ([`effort::SelectionRules::min_replay_gain`]): dry friction that holds a drawer or a knob
+/// between pushes is read low by effort space's smooth law, and output error corrects it by a
+/// material share of a small effort, replaying the motion 8 to 2000 times better. Otherwise the
+/// reading that saw the efforts stands, its levels held with their effort-space σ, and only what
+/// effort space cannot see (an end stop's position and bounce) is refined.
 fn refine_given(
     problem: &fit::Problem<'_>,
     nominal: &fit::FitResult,
