@@ -331,6 +331,14 @@ impl Family {
     fn follows_motion(self) -> bool {
         matches!(self, Self::Friction | Self::Viscous | Self::Inertia | Self::SoftClose)
     }
+
+    /// Whether its effort has a shape the model's own rigid-body error takes: an inertia or a
+    /// weight a few percent off acts on the joint through its acceleration (armature, a heavier
+    /// part) or its position (an offset, a spring, a tilted axis). Friction and damping follow
+    /// the speed, which no rigid-body term does alone.
+    fn mimics_rigid_body_error(self) -> bool {
+        matches!(self, Self::Constant | Self::Inertia | Self::Mass | Self::Tilt)
+    }
 }
 
 /// A regressor column: its values on each effort row it touches (NaN = not used).
@@ -1570,6 +1578,22 @@ impl EffortProblem<'_> {
             (Some(c), None) => Some(c.kind),
             _ => None,
         }
+    }
+
+    /// The kinds of `terms` on row r whose effort has a shape the model's own rigid-body error
+    /// takes ([`Family::mimics_rigid_body_error`]).
+    #[must_use]
+    pub fn rigid_body_shaped(&self, terms: &Terms, r: usize) -> Vec<EffectKind> {
+        terms.0.iter().map(|&c| &self.candidates[c]).filter(|c| c.row == r && c.family.mimics_rigid_body_error()).map(|c| c.kind).collect()
+    }
+
+    /// `terms` without row r's term of `kind`; None when it holds none. The other terms keep
+    /// their place; their levels are fitted again by [`Self::findings`].
+    #[must_use]
+    pub fn without(&self, terms: &Terms, r: usize, kind: EffectKind) -> Option<Terms> {
+        let rest: Vec<usize> =
+            terms.0.iter().copied().filter(|&c| !(self.candidates[c].row == r && self.candidates[c].kind == kind)).collect();
+        (rest.len() < terms.0.len()).then_some(Terms(rest))
     }
 
     /// `terms` with row r's friction read the other way, when it holds exactly one of dry
