@@ -1587,6 +1587,21 @@ impl EffortProblem<'_> {
         terms.0.iter().map(|&c| &self.candidates[c]).filter(|c| c.row == r && c.family.mimics_rigid_body_error()).map(|c| c.kind).collect()
     }
 
+    /// `terms` with row r's refinement of its friction law (a Stribeck law, friction by
+    /// direction) replaced by the base-law variant that fits best beside the other terms; None
+    /// when the row holds no refinement.
+    #[must_use]
+    pub fn base_reading(&self, terms: &Terms, r: usize) -> Option<Terms> {
+        let c = terms.0.iter().copied().find(|&c| self.candidates[c].row == r && self.candidates[c].is_refinement())?;
+        let rest: Vec<usize> = terms.0.iter().copied().filter(|&x| x != c).collect();
+        let banned = vec![false; self.candidates.len()];
+        self.best_base(&rest, c, &banned).map(|(b, _)| {
+            let mut set = self.with(&rest, b);
+            set.sort_unstable();
+            Terms(set)
+        })
+    }
+
     /// `terms` without row r's term of `kind`; None when it holds none. The other terms keep
     /// their place; their levels are fitted again by [`Self::findings`].
     #[must_use]
