@@ -310,6 +310,12 @@ struct HeldOutReplay<'a> {
 }
 
 impl HeldOutReplay<'_> {
+    /// The dof index of model joint `joint` where it is a joint of a chain (whose replay is the
+    /// whole tree's); None for a joint alone on its body.
+    fn chain_dof(&self, joint: usize) -> Option<usize> {
+        in_serial_chain(self.model, joint).then(|| self.model.dofs().iter().position(|&j| j == joint)).flatten()
+    }
+
     /// The chain under `findings` replayed through the held-out part (samples from `t_split`
     /// on) in pieces of `horizon_s`, each from the measured state.
     fn replay(&self, findings: &[JointFinding], sig: &Signals, horizon_s: f64) -> Vec<Vec<f64>> {
@@ -436,14 +442,11 @@ fn settle_refinements_by_replay(
     rules: &SelectionRules,
     mut held: Vec<Vec<f64>>,
 ) -> Vec<Vec<f64>> {
-    let dofs = replay.model.dofs();
     let horizon_s = found.band.held_out_horizon_s();
     // The whole recording's findings replayed through the held-out part, once it is needed.
     let mut whole_held: Option<Vec<Vec<f64>>> = None;
     for r in 0..found.rows.len() {
-        let Some(d) = dofs.iter().position(|&j| j == found.rows[r]).filter(|_| in_serial_chain(replay.model, found.rows[r])) else {
-            continue;
-        };
+        let Some(d) = replay.chain_dof(found.rows[r]) else { continue };
         if let (Some((train_problem, train_terms)), Some(train_findings)) = (found.train.as_mut(), found.train_findings.as_mut())
             && let Some(base) = train_problem.base_reading(train_terms, r)
         {
@@ -505,12 +508,9 @@ fn drop_what_the_motion_does_not_show(
     let (Some((train_problem, train_terms)), Some(train_findings)) = (found.train.as_mut(), found.train_findings.as_mut()) else {
         return held;
     };
-    let dofs = replay.model.dofs();
     let horizon_s = found.band.held_out_horizon_s();
     for r in 0..found.rows.len() {
-        let Some(d) = dofs.iter().position(|&j| j == found.rows[r]).filter(|_| in_serial_chain(replay.model, found.rows[r])) else {
-            continue;
-        };
+        let Some(d) = replay.chain_dof(found.rows[r]) else { continue };
         let mut kinds: Vec<(f64, EffectKind)> = train_problem
             .rigid_body_shaped(train_terms, r)
             .into_iter()
