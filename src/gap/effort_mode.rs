@@ -535,21 +535,75 @@ fn drop_what_the_motion_does_not_show(
                 found.findings = findings_with_stops(&found.problem, &whole, &found.stops);
                 found.terms = whole;
             }
-            found.overruled.push((
-                r,
-                kind.name().to_string(),
-                format!(
-                    "{}: effort space found it, but the joint's held-out replay is {} without it ({:.2e} against {:.2e} relative to \
-                     the model as written): a term of the shape the model's own inertia and weight errors take, which the motion does not show",
-                    kind.name(),
-                    if without_it <= with_it { "as good or better" } else { "hardly worse" },
-                    without_it,
-                    with_it
-                ),
-            ));
+            found.overruled.push((r, kind.name().to_string(), not_shown_line(kind, with_it, without_it)));
+        }
+    }
+    for r in 0..found.rows.len() {
+        if let Some(d) = replay.chain_dof(found.rows[r]) {
+            drop_whole_only_terms(replay, found, rules, r, d);
         }
     }
     held
+}
+
+/// The rule of [`drop_what_the_motion_does_not_show`] for the terms of row r (chain dof d) that
+/// only the whole recording's reading holds: the training part's reading has no such term, so
+/// its held-out replay never tested it. The training part is read as the whole recording reads
+/// the joint (its terms fitted on the training part), and each such term is kept only if the
+/// joint's held-out replay is worse without it by [`SelectionRules::min_cv_gain`]; the training
+/// reading itself is left as it was.
+fn drop_whole_only_terms(replay: &HeldOutReplay<'_>, found: &mut Identified<'_>, rules: &SelectionRules, r: usize, d: usize) {
+    let Some((train_problem, train_terms)) = found.train.as_ref() else {
+        return;
+    };
+    let in_training = train_problem.rigid_body_shaped(train_terms, r);
+    let horizon_s = found.band.held_out_horizon_s();
+    // Least material first, as for the training reading's terms.
+    let size = |k: EffectKind| {
+        let f = &found.findings[r];
+        f.effects.iter().zip(&f.effect_rms).find(|(e, _)| e.kind == k).map_or(0.0, |(_, rms)| *rms)
+    };
+    let mut whole_only: Vec<EffectKind> =
+        found.problem.rigid_body_shaped(&found.terms, r).into_iter().filter(|k| !in_training.contains(k)).collect();
+    whole_only.sort_by(|a, b| size(*a).total_cmp(&size(*b)));
+    if whole_only.is_empty() {
+        return;
+    }
+    let Some(read_as_whole) = train_problem.with_row_read_as(train_terms, r, &found.problem, &found.terms) else { return };
+    let replay_of = |terms: &Terms| replay.replay(&findings_with_stops(train_problem, terms, &found.stops), &found.sig, horizon_s);
+    let mut with_all = replay_of(&read_as_whole);
+    let mut kept = read_as_whole;
+    let mut dropped = Vec::new();
+    for kind in whole_only {
+        let Some(without) = train_problem.without(&kept, r, kind) else { continue };
+        let replayed = replay_of(&without);
+        let (with_it, without_it) = (replay.score(&with_all, &[d]), replay.score(&replayed, &[d]));
+        if shows_in_motion(rules, with_it, without_it) {
+            continue;
+        }
+        kept = without;
+        with_all = replayed;
+        dropped.push((kind, with_it, without_it));
+    }
+    for (kind, with_it, without_it) in dropped {
+        if let Some(whole) = found.problem.without(&found.terms, r, kind) {
+            found.findings = findings_with_stops(&found.problem, &whole, &found.stops);
+            found.terms = whole;
+            found.overruled.push((r, kind.name().to_string(), not_shown_line(kind, with_it, without_it)));
+        }
+    }
+}
+
+/// Why a term of the shape of the model's own rigid-body error was dropped.
+fn not_shown_line(kind: EffectKind, with_it: f64, without_it: f64) -> String {
+    format!(
+        "{}: effort space found it, but the joint's held-out replay is {} without it ({:.2e} against {:.2e} relative to \
+         the model as written): a term of the shape the model's own inertia and weight errors take, which the motion does not show",
+        kind.name(),
+        if without_it <= with_it { "as good or better" } else { "hardly worse" },
+        without_it,
+        with_it
+    )
 }
 
 /// Effort-space analysis of `rows` (model joint indices); one outcome per row.
