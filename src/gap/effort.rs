@@ -437,6 +437,12 @@ pub struct JointFinding {
 }
 
 impl JointFinding {
+    /// RMS effort over the motion of its term of `kind` (0 without one).
+    #[must_use]
+    pub fn effect_rms_of(&self, kind: EffectKind) -> f64 {
+        self.effects.iter().zip(&self.effect_rms).find(|(e, _)| e.kind == kind).map_or(0.0, |(_, rms)| *rms)
+    }
+
     /// The static level and the speed below which the joint counts as at rest, of the dry
     /// friction found on it (`coulomb_friction`: the larger of its two levels within its
     /// transition speed; `stribeck_friction`: its break-away within its Stribeck speed).

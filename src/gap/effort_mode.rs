@@ -511,14 +511,8 @@ fn drop_what_the_motion_does_not_show(
     let horizon_s = found.band.held_out_horizon_s();
     for r in 0..found.rows.len() {
         let Some(d) = replay.chain_dof(found.rows[r]) else { continue };
-        let mut kinds: Vec<(f64, EffectKind)> = train_problem
-            .rigid_body_shaped(train_terms, r)
-            .into_iter()
-            .map(|k| {
-                let f = &train_findings[r];
-                (f.effects.iter().zip(&f.effect_rms).find(|(e, _)| e.kind == k).map_or(0.0, |(_, rms)| *rms), k)
-            })
-            .collect();
+        let mut kinds: Vec<(f64, EffectKind)> =
+            train_problem.rigid_body_shaped(train_terms, r).into_iter().map(|k| (train_findings[r].effect_rms_of(k), k)).collect();
         kinds.sort_by(|a, b| a.0.total_cmp(&b.0));
         for (_, kind) in kinds {
             let Some(without) = train_problem.without(train_terms, r, kind) else { continue };
@@ -558,17 +552,13 @@ fn drop_whole_only_terms(replay: &HeldOutReplay<'_>, found: &mut Identified<'_>,
     };
     let in_training = train_problem.rigid_body_shaped(train_terms, r);
     let horizon_s = found.band.held_out_horizon_s();
-    // Least material first, as for the training reading's terms.
-    let size = |k: EffectKind| {
-        let f = &found.findings[r];
-        f.effects.iter().zip(&f.effect_rms).find(|(e, _)| e.kind == k).map_or(0.0, |(_, rms)| *rms)
-    };
     let mut whole_only: Vec<EffectKind> =
         found.problem.rigid_body_shaped(&found.terms, r).into_iter().filter(|k| !in_training.contains(k)).collect();
-    whole_only.sort_by(|a, b| size(*a).total_cmp(&size(*b)));
     if whole_only.is_empty() {
         return;
     }
+    // Least material first, as for the training reading's terms.
+    whole_only.sort_by(|a, b| found.findings[r].effect_rms_of(*a).total_cmp(&found.findings[r].effect_rms_of(*b)));
     let Some(read_as_whole) = train_problem.with_row_read_as(train_terms, r, &found.problem, &found.terms) else { return };
     let replay_of = |terms: &Terms| replay.replay(&findings_with_stops(train_problem, terms, &found.stops), &found.sig, horizon_s);
     let mut with_all = replay_of(&read_as_whole);
@@ -585,13 +575,17 @@ fn drop_whole_only_terms(replay: &HeldOutReplay<'_>, found: &mut Identified<'_>,
         with_all = replayed;
         dropped.push((kind, with_it, without_it));
     }
+    if dropped.is_empty() {
+        return;
+    }
     for (kind, with_it, without_it) in dropped {
         if let Some(whole) = found.problem.without(&found.terms, r, kind) {
-            found.findings = findings_with_stops(&found.problem, &whole, &found.stops);
             found.terms = whole;
             found.overruled.push((r, kind.name().to_string(), not_shown_line(kind, with_it, without_it)));
         }
     }
+    // Fitted once, for the terms left.
+    found.findings = findings_with_stops(&found.problem, &found.terms, &found.stops);
 }
 
 /// Why a term of the shape of the model's own rigid-body error was dropped.
