@@ -38,25 +38,43 @@ flags=(--sanitizer "$sanitizer" --target-dir "$target_dir")
 cargo +nightly fuzz build "${flags[@]}"
 
 logs="$(mktemp -d /tmp/partscene-fuzz-logs.XXXXXX)"
+# libFuzzer runs one input at a time on one core: targets run side by side, one lane per core
+# (PARTSCENE_FUZZ_JOBS, default every core), so each still has a core of its own for its seconds.
+jobs="${PARTSCENE_FUZZ_JOBS:-$(nproc)}"
+fuzz_one() {
+  local t="$1" status=0
+  mkdir -p "fuzz/corpus/$t" "fuzz/artifacts/$t"
+  local dirs=("fuzz/corpus/$t")
+  if [ -d "fuzz/regressions/$t" ]; then dirs+=("fuzz/regressions/$t"); fi
+  cargo +nightly fuzz run "${flags[@]}" "$t" "${dirs[@]}" -- \
+    -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 -seed="${PARTSCENE_FUZZ_SEED:-0}" >"$logs/$t.log" 2>&1 || status=$?
+  echo "$status" >"$logs/$t.status"
+}
+running=0
+for t in "${targets[@]}"; do
+  if [ "$running" -ge "$jobs" ]; then
+    wait -n || true
+    running=$((running - 1))
+  fi
+  echo "== fuzz $t for ${seconds} s"
+  fuzz_one "$t" &
+  running=$((running + 1))
+done
+wait || true
+
 failed=()
 summary=()
 for t in "${targets[@]}"; do
-  mkdir -p "fuzz/corpus/$t" "fuzz/artifacts/$t"
-  echo "== fuzz $t for ${seconds} s"
-  dirs=("fuzz/corpus/$t")
-  if [ -d "fuzz/regressions/$t" ]; then dirs+=("fuzz/regressions/$t"); fi
-  status=0
-  cargo +nightly fuzz run "${flags[@]}" "$t" "${dirs[@]}" -- \
-    -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 -seed="${PARTSCENE_FUZZ_SEED:-0}" >"$logs/$t.log" 2>&1 || status=$?
+  status="$(cat "$logs/$t.status" 2>/dev/null || echo '?')"
   execs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$logs/$t.log" | tail -n 1)"
   summary+=("$(printf '%-14s %12s executions' "$t" "${execs:-?}")")
-  if [ "$status" -ne 0 ]; then
+  if [ "$status" != 0 ]; then
     failed+=("$t")
     echo "fuzz: $t FAILED (exit $status); the last lines of its log ($logs/$t.log):" >&2
     tail -n 40 "$logs/$t.log" | cut -c1-300 >&2
   fi
 done
-echo "== fuzz summary (${seconds} s per target)"
+echo "== fuzz summary (${seconds} s per target, ${jobs} at a time)"
 printf '%s\n' "${summary[@]}"
 if [ "${#failed[@]}" -gt 0 ]; then
   echo "fuzz: failing targets: ${failed[*]} (inputs in fuzz/artifacts/; logs in $logs)" >&2
