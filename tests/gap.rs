@@ -628,33 +628,61 @@ fn double_pendulum_csv(q1: f64, q2: f64, duration_s: f64, friction: [f64; 2]) ->
 /// [`double_pendulum_csv`] with a load of (mass kg, inertia kg·m² about its centre) carried
 /// rigidly at the lower link's centre of mass.
 fn double_pendulum_with_load_csv(q1: f64, q2: f64, duration_s: f64, friction: [f64; 2], load: (f64, f64)) -> String {
+    simulated_double_pendulum_csv(q1, q2, duration_s, friction, load, None)
+}
+
+/// The motor torques of [`simulated_double_pendulum_csv`]'s driven runs, N·m at time `t` s: two
+/// incommensurate sines per joint of amplitudes `drive`.
+fn drive_torques(drive: (f64, f64), t: f64) -> [f64; 2] {
+    [drive.0 * ((2.1 * t).sin() + 0.5 * (5.3 * t + 1.0).sin()), drive.1 * ((3.7 * t + 0.5).sin() + 0.4 * (7.1 * t).sin())]
+}
+
+/// [`double_pendulum_with_load_csv`], driven by [`drive_torques`] (recorded as efforts) where
+/// `drive` is given.
+fn simulated_double_pendulum_csv(
+    q1: f64,
+    q2: f64,
+    duration_s: f64,
+    friction: [f64; 2],
+    load: (f64, f64),
+    drive: Option<(f64, f64)>,
+) -> String {
     let (m1, r1, ic1, l1, r2, g) = (0.6, 0.17, 0.004, 0.2, 0.28, 9.81);
     let (m2, ic2) = (0.65 + load.0, 0.0034 + load.1);
     let (i1, i2) = (ic1 + m1 * r1 * r1, ic2 + m2 * r2 * r2);
-    let accel = |s: [f64; 4]| -> [f64; 4] {
+    let accel = |s: [f64; 4], t: f64| -> [f64; 4] {
         let [a, b, va, vb] = s;
+        let u = drive.map_or([0.0, 0.0], |d| drive_torques(d, t));
         let (c2, s2) = (b.cos(), b.sin());
         let h = m2 * l1 * r2;
         let (m11, m12, m22) = (i1 + i2 + m2 * l1 * l1 + 2.0 * h * c2, i2 + h * c2, i2);
         let gravity1 = (m1 * r1 + m2 * l1) * g * a.sin() + m2 * g * r2 * (a + b).sin();
         let gravity2 = m2 * g * r2 * (a + b).sin();
-        let rhs1 = -(-2.0 * h * s2 * va * vb - h * s2 * vb * vb) - gravity1 - friction[0] * (va / 0.01).tanh();
-        let rhs2 = -(h * s2 * va * va) - gravity2 - friction[1] * (vb / 0.01).tanh();
+        let rhs1 = -(-2.0 * h * s2 * va * vb - h * s2 * vb * vb) - gravity1 - friction[0] * (va / 0.01).tanh() + u[0];
+        let rhs2 = -(h * s2 * va * va) - gravity2 - friction[1] * (vb / 0.01).tanh() + u[1];
         let det = m11 * m22 - m12 * m12;
         [va, vb, (m22 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det]
     };
     let mut s = [q1, q2, 0.0, 0.0];
     let h = 1e-4;
-    let mut csv = String::from("time,shoulder.q,elbow.q\n");
+    let mut csv =
+        String::from(if drive.is_some() { "time,shoulder.q,elbow.q,shoulder.effort,elbow.effort\n" } else { "time,shoulder.q,elbow.q\n" });
     let samples = (duration_s * 200.0).round() as usize;
     for i in 0..=samples {
-        writeln!(csv, "{:.4},{:.9},{:.9}", i as f64 / 200.0, s[0], s[1]).expect("writes to a string");
-        for _ in 0..50 {
+        let t0 = i as f64 / 200.0;
+        write!(csv, "{t0:.4},{:.9},{:.9}", s[0], s[1]).expect("writes to a string");
+        if let Some(d) = drive {
+            let u = drive_torques(d, t0);
+            write!(csv, ",{:.9},{:.9}", u[0], u[1]).expect("writes to a string");
+        }
+        csv.push('\n');
+        for step in 0..50 {
+            let t = t0 + f64::from(step) * h;
             let add = |x: [f64; 4], k: [f64; 4], f: f64| [x[0] + f * k[0], x[1] + f * k[1], x[2] + f * k[2], x[3] + f * k[3]];
-            let k1 = accel(s);
-            let k2 = accel(add(s, k1, h / 2.0));
-            let k3 = accel(add(s, k2, h / 2.0));
-            let k4 = accel(add(s, k3, h));
+            let k1 = accel(s, t);
+            let k2 = accel(add(s, k1, h / 2.0), t + h / 2.0);
+            let k3 = accel(add(s, k2, h / 2.0), t + h / 2.0);
+            let k4 = accel(add(s, k3, h), t + h);
             s = [0, 1, 2, 3].map(|j| s[j] + h / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]));
         }
     }
@@ -884,6 +912,23 @@ fn a_real_double_pendulums_rotor_inertia_survives_the_replay_check() {
             held.rmse_after
         );
     }
+}
+
+/// Broke: `MuJoCo`'s Panda with an exact model and dry friction on its first joint got a rotor
+/// inertia of 0.006 kg·m² there (4 % of the inertial effort the joint needs), and against a model
+/// a few percent off, armatures and heavier parts on joints whose inertia the errors change by that
+/// much. An inertia error of the model's own size is not a missing rotor: the driven double
+/// pendulum's lower link is 4.6 % heavier than modelled (and its inertia about its centre 0.0015
+/// kg·m² larger), which no reading may call a rotor or a heavier part, and the report says why.
+#[test]
+fn a_link_a_few_percent_off_its_model_is_not_named_a_rotor() {
+    let model = parse_model(DOUBLE_PENDULUM, Path::new("double_pendulum.urdf")).expect("model parses");
+    let csv = simulated_double_pendulum_csv(0.6, -0.4, 10.0, [0.0, 0.0], (0.03, 0.0015), Some((0.6, 0.3)));
+    let rec = parse_recording(&csv, Path::new("heavier_link.csv")).expect("parses");
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    assert!(report.effects.is_empty(), "within the model's accuracy: {:?}", report.effects);
+    let rejected = &report.joints["elbow"].rejected;
+    assert!(rejected.iter().any(|r| r.starts_with("armature:") && r.contains("effort the model needs")), "{rejected:?}");
 }
 
 /// A heavier knob turning about its own centre of mass: gravity does no work on it, so a rotor's

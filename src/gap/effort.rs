@@ -36,6 +36,15 @@ pub struct SelectionRules {
     /// (beyond holding it still against gravity), below which it is "physically nothing" and
     /// not reported.
     pub min_effort_share: f64,
+    /// How well a model's inertias are known, as a share of the effort it needs (the twin of
+    /// [`Self::min_static_load_share`] for the motion): masses, centres of mass and inertia
+    /// tensors a few percent off act on a joint through its whole row of the mass matrix, the
+    /// velocity products and gravity. An armature (inertia along the joint, no weight) smaller
+    /// than this share of the joint's RMS inertial effort (the model's effort beyond holding the
+    /// tree against gravity), or a heavier part whose added effort is smaller than this share of
+    /// the joint's whole RMS model effort, cannot be told from that error, and is not reported:
+    /// a small link 1.6× as heavy as modelled can be 4 % of what the arm above it needs.
+    pub min_inertial_load_share: f64,
     /// Residual RMS (share of the joint's own RMS effort) left after the best model above which
     /// `unknown` is reported.
     pub unknown_share: f64,
@@ -88,6 +97,7 @@ impl Default for SelectionRules {
             min_effort_share: 0.03,
             unknown_share: 0.2,
             min_static_load_share: 0.05,
+            min_inertial_load_share: 0.05,
             smoothing_half_width_s: 0.1,
             mass_scale_range: (0.5, 3.0),
             min_mass_change: 0.1,
@@ -375,6 +385,13 @@ pub struct RowInfo {
     /// RMS of the effort the model needs to hold the tree still against gravity at the joint
     /// ([`SelectionRules::min_static_load_share`]).
     pub gravity_rms: f64,
+    /// RMS of the effort the model needs at the joint to move the tree as recorded beyond
+    /// holding it against gravity (its inertial, centrifugal and Coriolis effort:
+    /// [`SelectionRules::min_inertial_load_share`]).
+    pub inertial_rms: f64,
+    /// RMS of the whole effort the model needs at the joint (inertial and gravity together: what a
+    /// heavier part scales).
+    pub model_rms: f64,
     /// Correlation of the recorded effort with the effort the model needs, over the used
     /// samples (near 1 where the model holds; strongly negative where the recording's sign
     /// convention is the opposite of the model's: [`EFFORT_AGAINST_MODEL`]).
@@ -633,8 +650,10 @@ impl<'a> EffortProblem<'a> {
             let scale =
                 rms_of(&|i| applied.as_ref().map_or(0.0, |e| e[i]) - z.gravity[d][i]).max(rms_of(&|i| z.tau[d][i] - z.gravity[d][i]));
             let gravity_rms = rms_of(&|i| z.gravity[d][i]);
+            let inertial_rms = rms_of(&|i| z.tau[d][i] - z.gravity[d][i]);
+            let model_rms = rms_of(&|i| z.tau[d][i]);
             let model_correlation = correlation((0..n).filter(|&i| ok[i]).map(|i| (measured[i], me.filtered.tau[d][i])));
-            rows.push(RowInfo { joint: j, dof: d, residual, effort_rms: scale, gravity_rms, model_correlation });
+            rows.push(RowInfo { joint: j, dof: d, residual, effort_rms: scale, gravity_rms, inertial_rms, model_rms, model_correlation });
             used.push(ok);
         }
         if used.iter().all(|u| u.iter().filter(|&&x| x).count() < 50) {
@@ -1138,6 +1157,10 @@ struct Verdict {
     /// For a term that depends on the position alone, its RMS effort over the model's RMS
     /// gravity effort at the joint (infinite for other terms and where gravity does no work).
     static_share: f64,
+    /// For an armature, its RMS effort over the model's RMS inertial effort at the joint; for a
+    /// heavier part, over the model's whole RMS effort there (infinite for other terms and where
+    /// the model needs none): [`SelectionRules::min_inertial_load_share`].
+    inertial_share: f64,
     /// Its fitted parameters are physical.
     plausible: bool,
 }
@@ -1193,8 +1216,28 @@ impl EffortProblem<'_> {
             } else {
                 f64::INFINITY
             },
+            inertial_share: self.inertial_share(c, size),
             plausible: self.plausible(c, &after.theta),
         }
+    }
+
+    /// [`Verdict::inertial_share`] of candidate c whose RMS effort is `size`.
+    fn inertial_share(&self, c: usize, size: f64) -> f64 {
+        let info = &self.rows[self.candidates[c].row];
+        let scale = match self.candidates[c].kind {
+            EffectKind::Armature => info.inertial_rms,
+            EffectKind::MassScale => info.model_rms,
+            _ => 0.0,
+        };
+        if scale > 0.0 { size / scale } else { f64::INFINITY }
+    }
+
+    /// Whether candidate c is shaped like an error of the model's rigid bodies: its weights and
+    /// centres of mass (an offset, a spring, a tilt) or its masses and inertias (an armature, a
+    /// heavier part), judged against the model's own effort by [`Self::select`].
+    fn shaped_like_model_error(&self, c: usize) -> bool {
+        let kind = self.candidates[c].kind;
+        kind.depends_on_position_alone() || matches!(kind, EffectKind::Armature | EffectKind::MassScale)
     }
 
     fn passes(&self, v: &Verdict) -> bool {
@@ -1226,14 +1269,16 @@ impl EffortProblem<'_> {
         }
     }
 
-    /// The selection: [`Self::select_without`] bans nothing, then again without the terms shaped like a
-    /// weight error that are too small next to the gravity effort ([`SelectionRules::min_static_load_share`]).
+    /// The selection: [`Self::select_without`] bans nothing, then again without the terms shaped
+    /// like an error of the model's rigid bodies that are too small next to the effort the model
+    /// needs ([`SelectionRules::min_static_load_share`], [`SelectionRules::min_inertial_load_share`]).
     fn select(&self) -> Vec<usize> {
-        // Terms shaped like an error of the model's weights (an offset, a spring, a tilt) are
-        // chosen as any other, then those too small next to the joint's gravity effort are
-        // banned and the selection is run again without them: judged inside the rounds, such a
-        // term can pass when it enters and fail later, and take a real term out with it each
-        // time (a spring beside a joint's friction).
+        // Terms shaped like an error of the model's rigid bodies (an offset, a spring, a tilt; an
+        // armature, a heavier part) are chosen as any other, then those too small next to the
+        // joint's gravity or inertial effort are banned and the selection is run again without
+        // them: judged inside the rounds, such a term can pass when it enters and fail later, and
+        // take a real term out with it each time (a spring beside a joint's friction). Both
+        // readings of a joint's inertia are banned alike: one left open takes the other's place.
         let mut banned = vec![false; self.candidates.len()];
         loop {
             let chosen = self.select_without(&banned);
@@ -1241,15 +1286,17 @@ impl EffortProblem<'_> {
             let weak: Vec<usize> = chosen
                 .iter()
                 .copied()
-                .filter(|&c| self.candidates[c].kind.depends_on_position_alone())
+                .filter(|&c| self.shaped_like_model_error(c))
                 .filter(|&c| {
                     let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
                     let v = self.verdict(&self.evaluate(&rest), &fitted, &self.rows_of(c), c, None);
-                    v.static_share < self.rules.min_static_load_share
+                    v.static_share < self.rules.min_static_load_share || v.inertial_share < self.rules.min_inertial_load_share
                 })
                 .collect();
-            if weak.is_empty() {
-                return chosen;
+            // Bans only grow, so this ends; a weak term already banned (none should come back)
+            // would otherwise repeat the round for ever.
+            if weak.is_empty() || weak.iter().all(|&c| banned[c]) {
+                return chosen.into_iter().filter(|c| !weak.contains(c)).collect();
             }
             for c in weak {
                 let (row, kind) = (self.candidates[c].row, self.candidates[c].kind);
@@ -1276,7 +1323,7 @@ impl EffortProblem<'_> {
         self.settle_refinements(&mut chosen, banned);
         self.prefer_offset_reading(&mut chosen, banned);
         self.prefer_better_pull(&mut chosen, banned);
-        self.prefer_inertia_alone(&mut chosen);
+        self.prefer_inertia_alone(&mut chosen, banned);
         chosen.sort_unstable();
         chosen
     }
@@ -1447,14 +1494,14 @@ impl EffortProblem<'_> {
     /// well (gravity does next to no work on it: a knob turning about its centre of mass, a
     /// horizontal drawer), the weight was never seen, so the narrower reading is reported and
     /// the heavier part is named as the other reading among the rejected.
-    fn prefer_inertia_alone(&self, chosen: &mut Vec<usize>) {
+    fn prefer_inertia_alone(&self, chosen: &mut Vec<usize>, banned: &[bool]) {
         let heavier: Vec<usize> = chosen.iter().copied().filter(|&c| self.candidates[c].kind == EffectKind::MassScale).collect();
         for m in heavier {
             let fitted = self.evaluate(chosen);
             let row = self.candidates[m].row;
             // Not where a rotor's inertia is already named beside the heavier part.
             let rotor = (0..self.candidates.len())
-                .find(|&c| self.candidates[c].row == row && self.candidates[c].kind == EffectKind::Armature)
+                .find(|&c| !banned[c] && self.candidates[c].row == row && self.candidates[c].kind == EffectKind::Armature)
                 .filter(|_| !chosen.iter().any(|&c| self.candidates[c].row == row && self.candidates[c].kind == EffectKind::Armature));
             if let Some((swapped, _, _)) = rotor.and_then(|a| self.as_good_in_place(chosen, &fitted, a, m)) {
                 *chosen = swapped;
@@ -1861,12 +1908,29 @@ impl EffortProblem<'_> {
                 100.0 * v.static_share,
                 100.0 * self.rules.min_static_load_share
             )
+        } else if v.inertial_share < self.rules.min_inertial_load_share {
+            format!(
+                "{:.1} % of the {} effort the model needs at the joint — an error of the modelled masses and inertias of \
+                 that size acts the same way (a documented model is rarely better than {:.0} %)",
+                100.0 * v.inertial_share,
+                if self.candidates[c].kind == EffectKind::Armature { "inertial" } else { "whole" },
+                100.0 * self.rules.min_inertial_load_share
+            )
         } else if v.gain < self.rules.min_cv_gain {
             format!("held-out error {:+.1} % — not better on data it was not fitted to", -100.0 * v.gain)
         } else if self.passes(&v) {
+            let why_not = if self.shaped_like_model_error(c) {
+                format!(
+                    "beside the terms first chosen it lay within what an error of the modelled rigid bodies does (under {:.0} % of \
+                     the gravity or {:.0} % of the inertial effort the model needs), or a term of its joint's family replaced it",
+                    100.0 * self.rules.min_static_load_share,
+                    100.0 * self.rules.min_inertial_load_share
+                )
+            } else {
+                "a term of its joint's family replaced it or it was settled away".to_owned()
+            };
             format!(
-                "beside the reported terms it passes (held-out error {:+.1} %, better in {:.0} % of the blocks), but a term of its \
-                 joint's family replaced it or it was settled away",
+                "beside the reported terms it passes (held-out error {:+.1} %, better in {:.0} % of the blocks), but {why_not}",
                 -100.0 * v.gain,
                 100.0 * v.fold_share
             )
