@@ -1278,7 +1278,8 @@ impl EffortProblem<'_> {
         // joint's gravity or inertial effort are banned and the selection is run again without
         // them: judged inside the rounds, such a term can pass when it enters and fail later, and
         // take a real term out with it each time (a spring beside a joint's friction). Both
-        // readings of a joint's inertia are banned alike: one left open takes the other's place.
+        // readings of a joint's inertia are judged alike: a heavier part takes a banned
+        // armature's place, and must pass the rule too.
         let mut banned = vec![false; self.candidates.len()];
         loop {
             let chosen = self.select_without(&banned);
