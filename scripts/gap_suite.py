@@ -58,6 +58,10 @@ carry) are listed in the truth, merged with what was added. Two arm cases are re
 is analysed, against a published identified model: their model.urdf (written after the check above)
 has every link's mass, centre of mass and inertia drawn up to 5 % off the engine's, and torque-sensor
 biases (effort_offset) are added to the recorded efforts; the controller knows only model.urdf.
+A third such case has on every joint the smooth, direction-dependent friction identified on a real
+Panda (Gaz et al., RA-L 2019: a logistic law of the speed, applied at every engine step) instead of
+the engine's ideal friction loss; its truth is that law in the spec's terms (friction,
+transition_speed, friction_reverse).
 """
 
 import argparse
@@ -1680,6 +1684,38 @@ class ArmCase:
     description: str
     added: list
     model_error: float = 0.0
+    # joint -> (A, k, c): the joint's friction as a published identification of a real arm has
+    # it, A / (1 + exp(-k (v + c))) - A / (1 + exp(-k c)), applied at every engine step.
+    friction_law: dict = field(default_factory=dict)
+
+
+# The joint friction identified on a real Franka Emika Panda (C. Gaz, M. Cognetti, A. Oliva,
+# P. Robuffo Giordano, A. De Luca, "Dynamic Identification of the Franka Emika Panda Robot With
+# Retrieval of Feasible Parameters Using Penalty-Based Optimization", IEEE RA-L 4(4), 2019,
+# Table of friction parameters phi_1, phi_2, phi_3 per joint): a logistic law of the link-side
+# speed, smooth over 0.12-0.39 rad/s (2 / k) and different by direction (the shift c), the
+# friction of a real torque-sensed arm rather than an engine's ideal one.
+PANDA_PUBLISHED_FRICTION = {
+    "joint1": (0.54615, 5.1181, 0.039533), "joint2": (0.87224, 9.0657, 0.025882),
+    "joint3": (0.64068, 10.136, -0.04607), "joint4": (1.2794, 5.5903, 0.036194),
+    "joint5": (0.83904, 8.3469, 0.026226), "joint6": (0.30301, 17.133, -0.021047),
+    "joint7": (0.56489, 10.336, 0.0035526),
+}
+
+
+def logistic_friction(law, v):
+    """The published law's friction effort at speed v (it opposes the motion: subtract it)."""
+    a, k, c = law
+    return a / (1.0 + math.exp(-k * (v + c))) - a / (1.0 + math.exp(-k * c))
+
+
+def logistic_friction_truth(law):
+    """The law in the spec's terms: levels forward and backward, tanh's transition speed (the
+    logistic's slope is tanh's at 2 / k)."""
+    a, k, c = law
+    at_rest = 1.0 / (1.0 + math.exp(-k * c))
+    return {"friction": round(a * (1.0 - at_rest), 6), "transition_speed": round(2.0 / k, 6),
+            "friction_reverse": round(a * at_rest, 6)}
 
 
 ARM_CASES = [
@@ -1710,6 +1746,12 @@ ARM_CASES = [
     ArmCase("arm_ur5e_identified_model_none", "ur5e",
             "UR5e against a model.urdf with identification errors (up to 5 % off); NO added effect "
             "(only the model's own armature)", [], model_error=0.05),
+    # Friction as a real arm has it: smooth through zero speed and different by direction, on
+    # every joint, at the levels and transitions published for the real Panda.
+    ArmCase("arm_panda_published_friction", "panda",
+            "Panda against a model.urdf with identification errors (up to 5 % off); on every joint the logistic "
+            "friction identified on the real arm (Gaz et al., RA-L 2019), applied at every engine step", [],
+            model_error=0.05, friction_law=PANDA_PUBLISHED_FRICTION),
 ]
 
 
@@ -1836,6 +1878,32 @@ def arm_excitation(nominal, armature, home, lo, hi, rng):
     return target(0.0)[0], effort
 
 
+class FrictionLawSim(MujocoSim):
+    """MuJoCo with a joint friction law of the speed added at every step (explicitly, from the
+    step's starting speed: the laws here are smooth over ~0.1 rad/s, far wider than a 1 ms step
+    moves the speed); `laws`: joint -> (A, k, c) of [`logistic_friction`]."""
+
+    def __init__(self, model, names, laws):
+        super().__init__(model, names)
+        self.laws = [(i, laws[name]) for i, name in enumerate(names) if name in laws]
+        self.effort = np.zeros(len(names))
+
+    def set_state(self, q, qd):
+        super().set_state(q, qd)
+        self.effort = np.zeros(len(self.names))
+
+    def hold(self, effort):
+        self.effort = np.asarray(effort, float).copy()
+
+    def advance(self, steps):
+        for _ in range(int(steps)):
+            applied = self.effort.copy()
+            for i, law in self.laws:
+                applied[i] -= logistic_friction(law, float(self.data.qvel[self.dadr[i]]))
+            self.data.qfrc_applied[self.dadr] = applied
+            mujoco.mj_step(self.model, self.data)
+
+
 def added_level(case, joint, kind):
     """What the arm case adds of one kind on one joint (0 where nothing)."""
     return sum(v for j, k, v in case.added if j == joint and k == kind)
@@ -1850,6 +1918,14 @@ def arm_effects(case, defaults):
                                           ("coulomb_friction", "friction", own["friction"], "frictionloss"),
                                           ("viscous_damping", "damping", 0.0, "damping")):
             total = mine + added[kind]
+            if kind == "coulomb_friction" and name in case.friction_law:
+                if total > 0:
+                    raise SuiteError(f"joint {name}: a published friction law on top of frictionloss {total:g}")
+                out.append(Effect(name, kind, logistic_friction_truth(case.friction_law[name]),
+                                  detail="the published logistic law A / (1 + exp(-k (v + c))) - A / (1 + exp(-k c)), "
+                                         f"(A, k, c) = {case.friction_law[name]}, applied through qfrc_applied at every "
+                                         "engine step; transition_speed 2 / k (the logistic's slope at rest as tanh's)"))
+                continue
             if total > 0:
                 detail = f"MuJoCo joint {engine}: model's own {mine:g} + added {added[kind]:g}"
                 if kind == "viscous_damping":
@@ -1922,7 +1998,8 @@ def run_arm_case(case, seed, out, mode):
         nominal.close()
         nominal = MujocoSim(mujoco.MjSpec.from_string(urdf).compile(), names)
     add_arm_effects(spec, case)
-    plant = MujocoSim(spec.compile(), names)
+    plant = (FrictionLawSim(spec.compile(), names, case.friction_law) if case.friction_law
+             else MujocoSim(spec.compile(), names))
     armature = np.array([defaults[n]["armature"] for n in names])
     q0, source_fn = arm_excitation(nominal, armature, source.home, lo, hi, rng)
     traj = simulate(plant, sample_steps(10.0, 200, False, rng), q0, source_fn)

@@ -540,6 +540,26 @@ fn drop_what_the_motion_does_not_show(
     held
 }
 
+/// Nothing unphysical is reported: a term whose level the final reading fits negative (or a part
+/// outside the plausible weights) is dropped, the others fitted again, and named among the
+/// rejected ([`EffortProblem::physical_reading`]).
+fn keep_physical(found: &mut Identified<'_>) {
+    let (terms, dropped) = found.problem.physical_reading(&found.terms);
+    if dropped.is_empty() {
+        return;
+    }
+    found.findings = findings_with_stops(&found.problem, &terms, &found.stops);
+    found.terms = terms;
+    for (r, kind) in dropped {
+        let line = format!(
+            "{}: with the other terms settled, its level fits outside what the kind can physically be (a negative damping or \
+             friction level, a part outside the plausible weights), so it is not reported",
+            kind.name()
+        );
+        found.overruled.push((r, kind.name().to_string(), line));
+    }
+}
+
 /// The rule of [`drop_what_the_motion_does_not_show`] for the terms of row r (chain dof d) that
 /// only the whole recording's reading holds: the training part's reading has no such term, so
 /// its held-out replay never tested it. The training part is read as the whole recording reads
@@ -662,6 +682,7 @@ pub(super) fn analyze_effort_space(
     let settled = settle_friction_by_replay(&replay, &mut found, &rules)
         .map(|held| settle_refinements_by_replay(&replay, &mut found, &rules, held))
         .map(|held| drop_what_the_motion_does_not_show(&replay, &mut found, &rules, held));
+    keep_physical(&mut found);
     let findings = found.findings_with_overruled();
     let Identified { band, sig, rows, train_findings, .. } = found;
     let rows = rows.as_slice();
