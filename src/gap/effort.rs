@@ -1445,6 +1445,12 @@ impl EffortProblem<'_> {
             .min_by(|a, b| a.sse.total_cmp(&b.sse))
     }
 
+    /// The first candidate of `kind` on joint `row` that is not `banned` (the kinds without a
+    /// grid have one).
+    fn unbanned_of(&self, row: usize, kind: EffectKind, banned: &[bool]) -> Option<usize> {
+        (0..self.candidates.len()).find(|&x| !banned[x] && self.candidates[x].row == row && self.candidates[x].kind == kind)
+    }
+
     /// Dry friction smooth over a wide transition and sharper dry friction beside viscous damping
     /// are alike over the speeds a recording holds: both rise through zero speed and keep growing
     /// towards its fastest motion. Forward selection takes the wide law first (one term explains
@@ -1475,11 +1481,7 @@ impl EffortProblem<'_> {
             {
                 continue;
             }
-            let Some(damping) = (0..self.candidates.len())
-                .find(|&x| self.candidates[x].row == row && self.candidates[x].family == Family::Viscous && !banned[x])
-            else {
-                continue;
-            };
+            let Some(damping) = self.unbanned_of(row, EffectKind::ViscousDamping, banned) else { continue };
             let fitted = self.evaluate(chosen);
             let vs = self.candidates[c].hyper[0];
             let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).chain([damping]).collect();
@@ -1540,8 +1542,7 @@ impl EffortProblem<'_> {
         if chosen.iter().any(|&x| on_row(x, Family::Constant)) {
             return None;
         }
-        let offset = (0..self.candidates.len())
-            .find(|&x| on_row(x, Family::Constant) && self.candidates[x].kind == EffectKind::EffortOffset && !banned[x])?;
+        let offset = self.unbanned_of(row, EffectKind::EffortOffset, banned)?;
         let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).chain([offset]).collect();
         let mine = self.evaluate(chosen).row_sse(row);
         let both_ways = |x: usize| self.candidates[x].family == Family::Friction && !self.candidates[x].is_refinement() && !banned[x];
@@ -1594,8 +1595,8 @@ impl EffortProblem<'_> {
             let fitted = self.evaluate(chosen);
             let row = self.candidates[m].row;
             // Not where a rotor's inertia is already named beside the heavier part.
-            let rotor = (0..self.candidates.len())
-                .find(|&c| !banned[c] && self.candidates[c].row == row && self.candidates[c].kind == EffectKind::Armature)
+            let rotor = self
+                .unbanned_of(row, EffectKind::Armature, banned)
                 .filter(|_| !chosen.iter().any(|&c| self.candidates[c].row == row && self.candidates[c].kind == EffectKind::Armature));
             if let Some((swapped, _, _)) = rotor.and_then(|a| self.as_good_in_place(chosen, &fitted, a, m)) {
                 *chosen = swapped;
