@@ -31,6 +31,12 @@ pub fn cholesky(a: &[f64], n: usize) -> Option<Vec<f64>> {
 #[must_use]
 pub fn cholesky_solve(l: &[f64], b: &[f64], n: usize) -> Vec<f64> {
     let mut y = b.to_vec();
+    cholesky_solve_in_place(l, &mut y, n);
+    y
+}
+
+/// [`cholesky_solve`] over `y`, which holds `b` and receives `x`.
+fn cholesky_solve_in_place(l: &[f64], y: &mut [f64], n: usize) {
     for i in 0..n {
         for k in 0..i {
             y[i] -= l[i * n + k] * y[k];
@@ -43,7 +49,6 @@ pub fn cholesky_solve(l: &[f64], b: &[f64], n: usize) -> Vec<f64> {
         }
         y[i] /= l[i * n + i];
     }
-    y
 }
 
 /// Solves `a x = b` for a symmetric positive definite `a` (row-major n×n); None if not SPD.
@@ -57,11 +62,12 @@ pub fn solve_spd(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
 pub fn inverse_spd(a: &[f64], n: usize) -> Option<Vec<f64>> {
     let l = cholesky(a, n)?;
     let mut inv = vec![0.0; n * n];
-    let mut unit = vec![0.0; n];
+    let mut column = vec![0.0; n];
     for c in 0..n {
-        unit.iter_mut().enumerate().for_each(|(i, u)| *u = f64::from(u8::from(i == c)));
-        for (r, v) in cholesky_solve(&l, &unit, n).into_iter().enumerate() {
-            inv[r * n + c] = v;
+        column.iter_mut().enumerate().for_each(|(i, u)| *u = f64::from(u8::from(i == c)));
+        cholesky_solve_in_place(&l, &mut column, n);
+        for (r, v) in column.iter().enumerate() {
+            inv[r * n + c] = *v;
         }
     }
     Some(inv)

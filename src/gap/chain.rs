@@ -102,20 +102,29 @@ fn friction_impulses(physics: &[JointPhysics], w: &[f64], v_free: &[f64], v_old:
     if physics.iter().all(|x| x.friction == 0.0 && x.friction_shape.friction_reverse.is_none_or(|r| r == 0.0)) {
         return p;
     }
+    // A smooth law linearised about the step's start velocity, implicit in the new one: its
+    // force there and its slope, the same in every sweep.
+    let smooth: Vec<Option<(f64, f64)>> = physics
+        .iter()
+        .zip(v_old)
+        .map(|(phys, &v)| {
+            let s = phys.friction_shape.transition_speed;
+            (s > 0.0).then(|| {
+                let level = phys.friction_level(v);
+                let slope = level / s * (1.0 - (v / s).tanh().powi(2));
+                (phys.smooth_friction(v).abs() * v.signum(), slope)
+            })
+        })
+        .collect();
     for _ in 0..SWEEPS {
         for d in 0..nd {
             let wdd = w[d * nd + d].max(1e-12);
             let c = v_free[d] + (0..nd).filter(|&k| k != d).map(|k| w[d * nd + k] * p[k]).sum::<f64>();
-            let phys = &physics[d];
-            let s = phys.friction_shape.transition_speed;
-            p[d] = if s > 0.0 {
-                // Smooth law linearised about the step's start velocity, implicit in the new one.
-                let level = phys.friction_level(v_old[d]);
-                let slope = level / s * (1.0 - (v_old[d] / s).tanh().powi(2));
-                -h * (phys.smooth_friction(v_old[d]).abs() * v_old[d].signum() + slope * (c - v_old[d])) / (1.0 + h * slope * wdd)
+            p[d] = if let Some((force, slope)) = smooth[d] {
+                -h * (force + slope * (c - v_old[d])) / (1.0 + h * slope * wdd)
             } else {
                 // Ideal Coulomb: the impulse that stops the joint, within the friction cone.
-                let level = h * phys.friction_level(if c == 0.0 { v_old[d] } else { c });
+                let level = h * physics[d].friction_level(if c == 0.0 { v_old[d] } else { c });
                 (-c / wdd).clamp(-level, level)
             };
         }

@@ -13,9 +13,11 @@
 //! error) stays unnamed. What remains material after the best model is reported once per joint
 //! as `unknown`, with its size in effort units.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::effects::{Effect, EffectKind};
 use super::model::{DofKind, GapModel};
@@ -526,7 +528,31 @@ pub struct EffortProblem<'a> {
     used: Vec<Vec<bool>>,
     /// Per row and fold: whether the joint moves there ([`MOVING_FOLD_SHARE`]).
     moving: Vec<Vec<bool>>,
+    /// Blocks of columns already fitted ([`Self::fit_block`]).
+    block_fits: Mutex<HashMap<Vec<usize>, Arc<BlockFit>>>,
+    /// Sizes of terms already measured ([`Self::change_rms`]).
+    change_sizes: Mutex<HashMap<ChangeKey, f64>>,
 }
+
+/// A term's size, by candidate and its parameters' bits, and the replaced term's, if any.
+type ChangeKey = (usize, Vec<u64>, Option<(usize, Vec<u64>)>);
+
+/// What one block of columns fits ([`EffortProblem::fit_block`]).
+#[derive(Debug)]
+struct BlockFit {
+    /// The effort rows the block's columns touch, ascending.
+    rows: Vec<usize>,
+    /// Held-out weighted squared error per touched row and fold.
+    fold_sse: Vec<Vec<f64>>,
+    /// Parameters fitted on all folds, in the block's column order.
+    theta: Vec<f64>,
+    /// Parameters fitted without each fold.
+    theta_without: Vec<Vec<f64>>,
+}
+
+/// Blocks kept in [`EffortProblem`]'s cache before it starts afresh (a bound on its memory: a
+/// block holds a few dozen numbers).
+const MAX_CACHED_BLOCKS: usize = 200_000;
 
 /// Least RMS speed of a joint over a block's samples, as a share of its RMS speed over all of
 /// them, for the block to show a law of its motion (friction, damping, a rotor's inertia): a
@@ -585,7 +611,8 @@ fn efforts_at(model: &GapModel, tree: &MultiBody, q_of: &[Vec<[f64; 3]>], gravit
 }
 
 fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVec3, bodies: &[usize]) -> ModelEfforts {
-    let raw = efforts_at(model, tree, &sig.raw, gravity, bodies);
+    let (raw, size) =
+        rayon::join(|| efforts_at(model, tree, &sig.raw, gravity, bodies), || efforts_at(model, tree, &sig.q, gravity, bodies));
     // Parallel filtering: each term passes the filter the measured efforts passed.
     let filtered = |v: Vec<Vec<f64>>| -> Vec<Vec<f64>> {
         v.iter()
@@ -597,7 +624,7 @@ fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVe
         gravity: filtered(raw.gravity),
         body_tau: raw.body_tau.into_iter().map(|(b, v)| (b, filtered(v))).collect(),
     };
-    ModelEfforts { filtered, size: efforts_at(model, tree, &sig.q, gravity, bodies) }
+    ModelEfforts { filtered, size }
 }
 
 /// The moving part of a joint: its child body and the bodies welded to it.
@@ -678,6 +705,8 @@ impl<'a> EffortProblem<'a> {
             weights: Vec::new(),
             used,
             moving: Vec::new(),
+            block_fits: Mutex::new(HashMap::new()),
+            change_sizes: Mutex::new(HashMap::new()),
         };
         problem.fold_of = problem.assign_folds(sig);
         problem.moving = problem.moving_folds(sig);
@@ -816,7 +845,16 @@ fn slides_within(sig: &Signals, d: usize, ok: &[bool], zone: (f64, f64)) -> bool
 /// Shares of the travel from the closed end for the soft-close engage positions tried.
 const ENGAGE_GRID: [f64; 5] = [0.1, 0.2, 0.35, 0.5, 0.7];
 
-impl EffortProblem<'_> {
+/// The candidates of one effort row and their columns, built apart from the other rows' (in
+/// parallel) and then appended in row order ([`EffortProblem::build_candidates`]); a candidate's
+/// column indices are local to its row's sink until then.
+#[derive(Default)]
+struct CandidateSink {
+    columns: Vec<Column>,
+    candidates: Vec<Candidate>,
+}
+
+impl CandidateSink {
     fn push_column(&mut self, row: usize, (values, size): (Vec<f64>, Vec<f64>)) -> usize {
         self.columns.push(Column { rows: BTreeMap::from([(row, values)]), size });
         self.columns.len() - 1
@@ -826,7 +864,9 @@ impl EffortProblem<'_> {
         let columns = cols.into_iter().map(|c| self.push_column(row, c)).collect();
         self.candidates.push(Candidate { row, kind, hyper, asymmetric, columns, family, unresolved: None });
     }
+}
 
+impl EffortProblem<'_> {
     /// The dry-friction candidates of row r (`ok`: its used samples; `v_rms`: its RMS speed):
     /// smooth Coulomb over a grid of transition speeds, the same by direction, Stribeck.
     ///
@@ -849,7 +889,7 @@ impl EffortProblem<'_> {
     /// 1.5 N·m of Coulomb friction a Stribeck law breaking away at 2.3). So a Stribeck law is
     /// named only where the joint also slides at its low speeds for the filter's span at a
     /// stretch ([`slides_within`], [`STRIBECK_ZONE`]).
-    fn push_dry_friction(&mut self, r: usize, sig: &Signals, ok: &[bool], v_rms: f64) {
+    fn push_dry_friction(&self, sink: &mut CandidateSink, r: usize, sig: &Signals, ok: &[bool], v_rms: f64) {
         let (d, n) = (self.rows[r].dof, sig.time_s.len());
         let dry = |smoothed: bool, f: &dyn Fn([f64; 3]) -> f64| -> (Vec<f64>, Vec<f64>) {
             let values = if smoothed { sig.motion_term(d, ok, f) } else { sig.term(d, ok, f) };
@@ -883,73 +923,91 @@ impl EffortProblem<'_> {
                 if vs > widest && m > TRANSITION_GRID[0] {
                     continue;
                 }
-                self.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], false, vec![dry(smoothed, &|x| (x[1] / vs).tanh())]);
+                sink.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], false, vec![dry(smoothed, &|x| (x[1] / vs).tanh())]);
                 let pos = dry(smoothed, &|x| if x[1] > 0.0 { (x[1] / vs).tanh() } else { 0.0 });
                 let neg = dry(smoothed, &|x| if x[1] < 0.0 { (x[1] / vs).tanh() } else { 0.0 });
-                self.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], true, vec![pos, neg]);
+                sink.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], true, vec![pos, neg]);
             }
             for (m, why) in STRIBECK_GRID.iter().zip(&unresolved) {
                 let ss = m * v_rms;
                 let base = dry(smoothed, &|x| (x[1] / vt).tanh());
                 let extra = dry(smoothed, &|x| (-(x[1] / ss).powi(2)).exp() * (x[1] / vt).tanh());
-                self.push(r, EffectKind::StribeckFriction, Family::Friction, vec![ss], false, vec![base, extra]);
-                if let Some(last) = self.candidates.last_mut() {
+                sink.push(r, EffectKind::StribeckFriction, Family::Friction, vec![ss], false, vec![base, extra]);
+                if let Some(last) = sink.candidates.last_mut() {
                     last.unresolved.clone_from(why);
                 }
             }
         }
     }
 
-    /// Every candidate term of every row, with its regressor columns.
+    /// Every candidate term of every row, with its regressor columns: each row's built apart
+    /// (in parallel), then appended in row order, so that the columns' and candidates' order is
+    /// the rows' whatever the threads do.
     fn build_candidates(&mut self, sig: &Signals, me: &ModelEfforts, part_of: &[Vec<usize>], gravity_dir: DVec3) {
-        let n = sig.time_s.len();
-        for r in 0..self.rows.len() {
-            let (j, d) = (self.rows[r].joint, self.rows[r].dof);
-            let joint = &self.model.joints[j];
-            let chain = in_serial_chain(self.model, j);
-            let ok = self.used[r].clone();
-            let col = |f: &dyn Fn([f64; 3]) -> f64| -> (Vec<f64>, Vec<f64>) {
-                (sig.term(d, &ok, f), (0..n).map(|i| if ok[i] { f(sig.q[d][i]) } else { f64::NAN }).collect())
-            };
-            let v_rms = rms((0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][1])).max(1e-6);
-            let qs: Vec<f64> = (0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][0]).collect();
-            let (lo, hi) = qs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
-            self.push_dry_friction(r, sig, &ok, v_rms);
-            self.push(r, EffectKind::ViscousDamping, Family::Viscous, Vec::new(), false, vec![col(&|x| x[1])]);
-            self.push(r, EffectKind::EffortOffset, Family::Constant, Vec::new(), false, vec![col(&|_| -1.0)]);
-            self.push(r, EffectKind::Spring, Family::Constant, Vec::new(), false, vec![col(&|x| x[0]), col(&|_| -1.0)]);
-            // A motor's rotor is the likelier extra inertia of a joint in an actuated chain, a
-            // heavier part that of a single pushed joint: when the two cannot be told apart
-            // (gravity does no work on the joint), the earlier candidate wins the tie.
-            let mass = self.mass_candidate(r, me, part_of, n);
-            if chain {
-                self.push(r, EffectKind::Armature, Family::Inertia, Vec::new(), false, vec![col(&|x| x[2])]);
-                self.candidates.extend(mass);
-            } else {
-                self.candidates.extend(mass);
-                self.push(r, EffectKind::Armature, Family::Inertia, Vec::new(), false, vec![col(&|x| x[2])]);
-            }
-            // A tilted axis is a property of a joint alone on its body; in a chain the sin law of
-            // its own angle does not hold.
-            if joint.kind.is_rotational() && !chain && tilt_applies(self.model, j, gravity_dir) {
-                self.push(r, EffectKind::GravityTilt, Family::Tilt, Vec::new(), false, vec![col(&|x| x[0].sin()), col(&|x| -x[0].cos())]);
-            }
-            if joint.kind != DofKind::Continuous && hi > lo {
-                let closed = joint.lower.unwrap_or(0.0);
-                let far = if (hi - closed).abs() >= (lo - closed).abs() { hi } else { lo };
-                for frac in ENGAGE_GRID {
-                    let engage = closed + frac * (far - closed);
-                    let inside = move |q: f64| (q - closed) * (engage - closed) >= 0.0 && (q - closed).abs() <= (engage - closed).abs();
-                    let c = col(&|x| if inside(x[0]) { x[1] } else { 0.0 });
-                    self.push(r, EffectKind::SoftClose, Family::SoftClose, vec![engage], false, vec![c]);
-                }
-            }
+        let sinks: Vec<CandidateSink> =
+            (0..self.rows.len()).into_par_iter().map(|r| self.row_candidates(r, sig, me, part_of, gravity_dir)).collect();
+        for sink in sinks {
+            let offset = self.columns.len();
+            self.columns.extend(sink.columns);
+            self.candidates.extend(sink.candidates.into_iter().map(|mut c| {
+                c.columns.iter_mut().for_each(|col| *col += offset);
+                c
+            }));
         }
     }
 
+    /// The candidate terms of row r, with their regressor columns.
+    fn row_candidates(&self, r: usize, sig: &Signals, me: &ModelEfforts, part_of: &[Vec<usize>], gravity_dir: DVec3) -> CandidateSink {
+        let mut sink = CandidateSink::default();
+        let n = sig.time_s.len();
+        let (j, d) = (self.rows[r].joint, self.rows[r].dof);
+        let joint = &self.model.joints[j];
+        let chain = in_serial_chain(self.model, j);
+        let ok = &self.used[r];
+        let col = |f: &dyn Fn([f64; 3]) -> f64| -> (Vec<f64>, Vec<f64>) {
+            (sig.term(d, ok, f), (0..n).map(|i| if ok[i] { f(sig.q[d][i]) } else { f64::NAN }).collect())
+        };
+        let v_rms = rms((0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][1])).max(1e-6);
+        let qs: Vec<f64> = (0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][0]).collect();
+        let (lo, hi) = qs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
+        self.push_dry_friction(&mut sink, r, sig, ok, v_rms);
+        sink.push(r, EffectKind::ViscousDamping, Family::Viscous, Vec::new(), false, vec![col(&|x| x[1])]);
+        sink.push(r, EffectKind::EffortOffset, Family::Constant, Vec::new(), false, vec![col(&|_| -1.0)]);
+        sink.push(r, EffectKind::Spring, Family::Constant, Vec::new(), false, vec![col(&|x| x[0]), col(&|_| -1.0)]);
+        // A motor's rotor is the likelier extra inertia of a joint in an actuated chain, a
+        // heavier part that of a single pushed joint: when the two cannot be told apart
+        // (gravity does no work on the joint), the earlier candidate wins the tie.
+        // (The heavier part's column comes first either way.)
+        let mass = self.mass_candidate(&mut sink, r, me, part_of, n);
+        if chain {
+            sink.push(r, EffectKind::Armature, Family::Inertia, Vec::new(), false, vec![col(&|x| x[2])]);
+            sink.candidates.extend(mass);
+        } else {
+            sink.candidates.extend(mass);
+            sink.push(r, EffectKind::Armature, Family::Inertia, Vec::new(), false, vec![col(&|x| x[2])]);
+        }
+        // A tilted axis is a property of a joint alone on its body; in a chain the sin law of
+        // its own angle does not hold.
+        if joint.kind.is_rotational() && !chain && tilt_applies(self.model, j, gravity_dir) {
+            sink.push(r, EffectKind::GravityTilt, Family::Tilt, Vec::new(), false, vec![col(&|x| x[0].sin()), col(&|x| -x[0].cos())]);
+        }
+        if joint.kind != DofKind::Continuous && hi > lo {
+            let closed = joint.lower.unwrap_or(0.0);
+            let far = if (hi - closed).abs() >= (lo - closed).abs() { hi } else { lo };
+            for frac in ENGAGE_GRID {
+                let engage = closed + frac * (far - closed);
+                let inside = move |q: f64| (q - closed) * (engage - closed) >= 0.0 && (q - closed).abs() <= (engage - closed).abs();
+                let c = col(&|x| if inside(x[0]) { x[1] } else { 0.0 });
+                sink.push(r, EffectKind::SoftClose, Family::SoftClose, vec![engage], false, vec![c]);
+            }
+        }
+        sink
+    }
+
     /// The heavier-part candidate of row r: the effort of its moving part's inertia on every
-    /// identified joint (a heavier forearm loads the shoulder too).
-    fn mass_candidate(&mut self, r: usize, me: &ModelEfforts, part_of: &[Vec<usize>], n: usize) -> Option<Candidate> {
+    /// identified joint (a heavier forearm loads the shoulder too). Its column goes into `sink`;
+    /// the candidate is returned for the caller to place.
+    fn mass_candidate(&self, sink: &mut CandidateSink, r: usize, me: &ModelEfforts, part_of: &[Vec<usize>], n: usize) -> Option<Candidate> {
         if part_of[r].is_empty() {
             return None;
         }
@@ -966,21 +1024,23 @@ impl EffortProblem<'_> {
         let d = self.rows[r].dof;
         let size =
             (0..n).map(|i| if self.used[r][i] { part_of[r].iter().map(|b| me.size.body_tau[b][d][i]).sum() } else { f64::NAN }).collect();
-        self.columns.push(Column { rows, size });
+        sink.columns.push(Column { rows, size });
         Some(Candidate {
             row: r,
             kind: EffectKind::MassScale,
             hyper: Vec::new(),
             asymmetric: false,
-            columns: vec![self.columns.len() - 1],
+            columns: vec![sink.columns.len() - 1],
             family: Family::Mass,
             unresolved: None,
         })
     }
 
+    /// Per row (in parallel), the Gram matrices of its columns fold by fold.
     fn build_grams(&mut self) {
         let k = self.rules.folds.max(2);
         self.grams = (0..self.rows.len())
+            .into_par_iter()
             .map(|r| {
                 let columns: Vec<usize> = (0..self.columns.len()).filter(|&c| self.columns[c].rows.contains_key(&r)).collect();
                 let m = columns.len();
@@ -1046,22 +1106,67 @@ impl EffortProblem<'_> {
         cols
     }
 
-    /// Weighted least squares of the columns of `set` on the folds other than `skip` (None: all).
-    fn solve(&self, cols: &[usize], skip: Option<usize>) -> Vec<f64> {
+    /// The columns `cols` (sorted) split into the independent blocks of their normal equations:
+    /// two columns meet in a solve only where they share an effort row, directly or through
+    /// other columns (a heavier part's column spans the joints its weight loads). Each block keeps
+    /// its columns' order; blocks come in the order of their first column. Solving the blocks
+    /// apart gives the joint solve's numbers exactly (Cholesky adds exact zeros across blocks),
+    /// and a block that a candidate does not touch is fitted once ([`Self::fit_block`]'s cache).
+    fn blocks_of(&self, cols: &[usize]) -> Vec<Vec<usize>> {
+        fn root(parent: &mut [usize], mut x: usize) -> usize {
+            while parent[x] != x {
+                parent[x] = parent[parent[x]];
+                x = parent[x];
+            }
+            x
+        }
+        let mut parent: Vec<usize> = (0..self.rows.len()).collect();
+        for &c in cols {
+            let mut rows = self.columns[c].rows.keys();
+            if let Some(&first) = rows.next() {
+                let a = root(&mut parent, first);
+                for &r in rows {
+                    let b = root(&mut parent, r);
+                    parent[b] = a;
+                }
+            }
+        }
+        let mut blocks: Vec<(usize, Vec<usize>)> = Vec::new();
+        for &c in cols {
+            let Some(&r) = self.columns[c].rows.keys().next() else { continue };
+            let top = root(&mut parent, r);
+            match blocks.iter_mut().find(|(x, _)| *x == top) {
+                Some((_, v)) => v.push(c),
+                None => blocks.push((top, vec![c])),
+            }
+        }
+        blocks.into_iter().map(|(_, v)| v).collect()
+    }
+
+    /// Per effort row, the pairs (index among the row's Gram columns, index in `cols`) of the
+    /// columns of `cols` (sorted) that the row holds, in the row's column order.
+    fn local_maps(&self, cols: &[usize]) -> Vec<Vec<(usize, usize)>> {
+        self.grams
+            .iter()
+            .map(|g| g.columns.iter().enumerate().filter_map(|(li, c)| cols.binary_search(c).ok().map(|gi| (li, gi))).collect())
+            .collect()
+    }
+
+    /// Weighted least squares of the columns `cols` (`maps`: their [`Self::local_maps`]) on the
+    /// folds other than `skip` (None: all).
+    fn solve(&self, cols: &[usize], maps: &[Vec<(usize, usize)>], skip: Option<usize>) -> Vec<f64> {
         let p = cols.len();
         let mut a = vec![0.0; p * p];
         let mut b = vec![0.0; p];
-        for g in &self.grams {
-            let local: Vec<(usize, usize)> =
-                g.columns.iter().enumerate().filter_map(|(li, c)| cols.iter().position(|x| x == c).map(|gi| (li, gi))).collect();
+        for (g, local) in self.grams.iter().zip(maps) {
             let m = g.columns.len();
             for (k, f) in g.folds.iter().enumerate() {
                 if Some(k) == skip {
                     continue;
                 }
-                for &(la, ga) in &local {
+                for &(la, ga) in local {
                     b[ga] += f.1[la];
-                    for &(lb, gb) in &local {
+                    for &(lb, gb) in local {
                         a[ga * p + gb] += f.0[la * m + lb];
                     }
                 }
@@ -1074,30 +1179,64 @@ impl EffortProblem<'_> {
         solve_spd(&a, &b, p).unwrap_or_else(|| vec![0.0; p])
     }
 
-    fn evaluate(&self, set: &[usize]) -> Evaluation {
-        let cols = self.columns_of(set);
+    /// One block of columns ([`Self::blocks_of`]) fitted on every fold left out in turn and on
+    /// all, with the held-out error of each row it touches; remembered, since forward selection
+    /// asks for the same blocks over and over (every candidate of one joint beside the others'
+    /// terms).
+    fn fit_block(&self, cols: &[usize]) -> Arc<BlockFit> {
+        if let Some(hit) = self.block_fits.lock().ok().and_then(|cache| cache.get(cols).cloned()) {
+            return hit;
+        }
         let k = self.rules.folds.max(2);
-        let mut fold_sse = vec![vec![0.0; k]; self.rows.len()];
+        let maps = self.local_maps(cols);
+        let touched: Vec<usize> = (0..self.rows.len()).filter(|&r| !maps[r].is_empty()).collect();
+        let mut fold_sse = vec![vec![0.0; k]; touched.len()];
         let mut theta_without = Vec::with_capacity(k);
         for fold in 0..k {
-            let theta = self.solve(&cols, Some(fold));
-            for (row_sse, g) in fold_sse.iter_mut().zip(&self.grams) {
+            let theta = self.solve(cols, &maps, Some(fold));
+            for (row_sse, &r) in fold_sse.iter_mut().zip(&touched) {
+                let g = &self.grams[r];
                 let (gram, cr, rr, _) = &g.folds[fold];
                 let m = g.columns.len();
-                let local: Vec<(usize, f64)> =
-                    g.columns.iter().enumerate().filter_map(|(li, c)| cols.iter().position(|x| x == c).map(|gi| (li, theta[gi]))).collect();
                 let mut sse = *rr;
-                for &(la, ta) in &local {
+                for &(la, ga) in &maps[r] {
+                    let ta = theta[ga];
                     sse -= 2.0 * ta * cr[la];
-                    for &(lb, tb) in &local {
-                        sse += ta * tb * gram[la * m + lb];
+                    for &(lb, gb) in &maps[r] {
+                        sse += ta * theta[gb] * gram[la * m + lb];
                     }
                 }
                 row_sse[fold] = sse.max(0.0);
             }
-            theta_without.push(cols.iter().copied().zip(theta).collect());
+            theta_without.push(theta);
         }
-        let theta = cols.iter().copied().zip(self.solve(&cols, None)).collect();
+        let fit = Arc::new(BlockFit { rows: touched, fold_sse, theta: self.solve(cols, &maps, None), theta_without });
+        if let Ok(mut cache) = self.block_fits.lock() {
+            if cache.len() >= MAX_CACHED_BLOCKS {
+                cache.clear();
+            }
+            cache.insert(cols.to_vec(), Arc::clone(&fit));
+        }
+        fit
+    }
+
+    fn evaluate(&self, set: &[usize]) -> Evaluation {
+        let cols = self.columns_of(set);
+        let k = self.rules.folds.max(2);
+        // A row no column touches keeps the residual of the model as written.
+        let mut fold_sse: Vec<Vec<f64>> = self.grams.iter().map(|g| g.folds.iter().map(|f| f.2.max(0.0)).collect()).collect();
+        let mut theta = BTreeMap::new();
+        let mut theta_without = vec![BTreeMap::new(); k];
+        for block in self.blocks_of(&cols) {
+            let fit = self.fit_block(&block);
+            for (&r, sse) in fit.rows.iter().zip(&fit.fold_sse) {
+                fold_sse[r].clone_from(sse);
+            }
+            theta.extend(block.iter().copied().zip(fit.theta.iter().copied()));
+            for (all, without) in theta_without.iter_mut().zip(&fit.theta_without) {
+                all.extend(block.iter().copied().zip(without.iter().copied()));
+            }
+        }
         Evaluation { fold_sse, theta, theta_without }
     }
 
@@ -1117,18 +1256,36 @@ impl EffortProblem<'_> {
         self.change_rms(c, theta, None)
     }
 
-    /// Effort of candidate c's term under `theta` at sample i, in the motion's description.
-    fn term_at(&self, c: usize, theta: &BTreeMap<usize, f64>, i: usize) -> f64 {
-        self.candidates[c].columns.iter().map(|col| theta.get(col).copied().unwrap_or(0.0) * self.columns[*col].size[i]).sum()
+    /// Candidate c's term under `theta` in the motion's description: its columns' values, each
+    /// with its parameter.
+    fn term_parts<'s>(&'s self, c: usize, theta: &BTreeMap<usize, f64>) -> Vec<(f64, &'s [f64])> {
+        self.candidates[c].columns.iter().map(|col| (theta.get(col).copied().unwrap_or(0.0), self.columns[*col].size.as_slice())).collect()
     }
 
     /// RMS of what candidate c under `theta` changes on its row: its whole term, or, where it
     /// replaces a member of its family (`replaced`, under `theta_replaced`), the difference
     /// (a Stribeck law in place of a Coulomb one changes only the break-away).
+    /// Remembered by the parameters' bits: forward selection asks for the same terms under the
+    /// same fits round after round (a joint's candidates while another joint's term enters).
     fn change_rms(&self, c: usize, theta: &BTreeMap<usize, f64>, replaced: Option<(usize, &BTreeMap<usize, f64>)>) -> f64 {
         let row = self.candidates[c].row;
         let n = self.rows[row].residual.len();
-        rms((0..n).filter(|&i| self.used[row][i]).map(|i| self.term_at(c, theta, i) - replaced.map_or(0.0, |(r, t)| self.term_at(r, t, i))))
+        let at = |parts: &[(f64, &[f64])], i: usize| parts.iter().map(|(k, v)| k * v[i]).sum::<f64>();
+        let mine = self.term_parts(c, theta);
+        let other = replaced.map(|(r, t)| (r, self.term_parts(r, t)));
+        let bits = |parts: &[(f64, &[f64])]| parts.iter().map(|(k, _)| k.to_bits()).collect::<Vec<u64>>();
+        let key = (c, bits(&mine), other.as_ref().map(|(r, o)| (*r, bits(o))));
+        if let Some(&hit) = self.change_sizes.lock().ok().as_ref().and_then(|cache| cache.get(&key)) {
+            return hit;
+        }
+        let size = rms((0..n).filter(|&i| self.used[row][i]).map(|i| at(&mine, i) - other.as_ref().map_or(0.0, |(_, o)| at(o, i))));
+        if let Ok(mut cache) = self.change_sizes.lock() {
+            if cache.len() >= MAX_CACHED_BLOCKS {
+                cache.clear();
+            }
+            cache.insert(key, size);
+        }
+        size
     }
 
     /// The member of c's family on c's joint in `set`, other than c.
@@ -2149,5 +2306,81 @@ mod tests {
         // The same pull backwards, and not at speeds outside the zone.
         check_slides(&|t| -pull(t), (0.015, 0.05), true);
         check_slides(&pull, (0.05, 0.2), false);
+    }
+
+    /// The effort problem of a two-link arm swinging in a vertical plane (10 s at 200 Hz),
+    /// its efforts those of the model with friction on both joints.
+    fn two_link_problem(model: &GapModel) -> EffortProblem<'_> {
+        let (tree, _) = model.multibody().expect("tree");
+        let time_s: Vec<f64> = (0..2000).map(|i| f64::from(i) / 200.0).collect();
+        let q: Vec<Vec<f64>> = [(0.7, 1.3), (0.5, 2.1)]
+            .iter()
+            .map(|&(a, w)| time_s.iter().map(|&t| a * (w * t).sin() + 0.2 * (2.9 * w * t).cos()).collect())
+            .collect();
+        let gravity = DVec3::new(0.0, 0.0, -9.81);
+        let motion: Vec<Vec<[f64; 3]>> = q.iter().map(|y| local_cubic(&time_s, y, 0.02)).collect();
+        let efforts: Vec<Option<Vec<f64>>> = (0..2)
+            .map(|d| {
+                Some(
+                    (0..time_s.len())
+                        .map(|i| {
+                            let at = |k: usize| motion.iter().map(|m| m[i][k]).collect::<Vec<f64>>();
+                            let tau = tree.inverse_dynamics(&at(0), &at(1), &at(2), gravity)[d];
+                            tau + 0.3 * (at(1)[d] / 0.01).tanh()
+                        })
+                        .collect(),
+                )
+            })
+            .collect();
+        let band = bandwidth(&time_s, &q, 0.05, 5.0);
+        let sig = signals(&time_s, &q, &efforts, &band);
+        let rows: Vec<usize> = model.dofs();
+        let excluded = vec![vec![false; time_s.len()]; rows.len()];
+        EffortProblem::new(model, &sig, gravity, &rows, &excluded, &vec![true; time_s.len()], SelectionRules::default()).expect("problem")
+    }
+
+    #[test]
+    fn blocks_solved_apart_give_the_joint_solve_and_a_heavier_part_couples_its_joints() {
+        let urdf = r#"<robot name="arm"><link name="base"/>
+          <link name="upper"><inertial><origin xyz="0 0 -0.15"/><mass value="1.2"/><inertia ixx="0.01" iyy="0.01" izz="0.002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+          <link name="fore"><inertial><origin xyz="0 0 -0.12"/><mass value="0.7"/><inertia ixx="0.005" iyy="0.005" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+          <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
+          <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="0 0 -0.3"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
+        </robot>"#;
+        let model = super::super::model::parse_model(urdf, std::path::Path::new("arm.urdf")).expect("model");
+        let problem = two_link_problem(&model);
+        let first_of = |row: usize, kind: EffectKind| {
+            (0..problem.candidates.len())
+                .find(|&c| problem.candidates[c].row == row && problem.candidates[c].kind == kind)
+                .expect("candidate")
+        };
+        // The forearm's heavier part loads the shoulder too: one block with both joints' terms.
+        let heavier = first_of(1, EffectKind::MassScale);
+        assert_eq!(problem.rows_of(heavier), vec![0, 1]);
+        let coupled = [first_of(0, EffectKind::CoulombFriction), first_of(1, EffectKind::ViscousDamping), heavier];
+        let apart = [first_of(0, EffectKind::CoulombFriction), first_of(1, EffectKind::ViscousDamping)];
+        for (set, blocks) in [(&coupled[..], 1), (&apart[..], 2)] {
+            let cols = problem.columns_of(set);
+            assert_eq!(problem.blocks_of(&cols).len(), blocks, "{set:?}");
+            // One solve over every column at once, the whole Gram matrix assembled.
+            let joint_solve = |skip: Option<usize>| problem.solve(&cols, &problem.local_maps(&cols), skip);
+            let got = problem.evaluate(set);
+            for (k, without) in got.theta_without.iter().enumerate() {
+                let want = joint_solve(Some(k));
+                for (i, c) in cols.iter().enumerate() {
+                    assert_eq!(without[c].to_bits(), want[i].to_bits(), "fold {k}, column {c}");
+                }
+            }
+            let want = joint_solve(None);
+            assert!(cols.iter().enumerate().all(|(i, c)| got.theta[c].to_bits() == want[i].to_bits()));
+            // Asked again (now from the cache), the same numbers.
+            let again = problem.evaluate(set);
+            assert_eq!(again.fold_sse, got.fold_sse);
+            assert_eq!(again.theta, got.theta);
+        }
+        // The friction put in explains the shoulder: its fitted level is the one put in.
+        let fit = problem.evaluate(&[first_of(0, EffectKind::CoulombFriction), first_of(1, EffectKind::CoulombFriction)]);
+        let level = problem.effect_of(first_of(0, EffectKind::CoulombFriction), &fit.theta).params[0];
+        assert!((level - 0.3).abs() < 0.03, "shoulder friction {level}");
     }
 }

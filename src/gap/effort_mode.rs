@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::chain::{ChainInput, replay};
 use super::effects::{Effect, EffectKind, JointPhysics};
@@ -281,18 +282,27 @@ fn identify_at<'a>(
             widen_into(&mut excluded[r], &stop.contact, &rec.time_s, support_s);
         }
     }
-    let problem = if stops.iter().all(Vec::is_empty) {
-        first
-    } else {
-        EffortProblem::new(model, &sig, gravity, &rows, &excluded, &everything, rules.clone()).unwrap_or(first)
-    };
-    let terms = problem.chosen_terms();
-    let findings = findings_with_stops(&problem, &terms, &stops);
-    let train = EffortProblem::new(model, &sig, gravity, &rows, &excluded, &train, rules.clone()).map(|p| {
-        let t = p.chosen_terms();
-        (p, t)
-    });
-    let train_findings = train.as_ref().map(|(p, t)| findings_with_stops(p, t, &stops));
+    // The whole recording's reading and the training part's are independent: in parallel.
+    let ((problem, terms, findings), (train, train_findings)) = rayon::join(
+        || {
+            let problem = if stops.iter().all(Vec::is_empty) {
+                first
+            } else {
+                EffortProblem::new(model, &sig, gravity, &rows, &excluded, &everything, rules.clone()).unwrap_or(first)
+            };
+            let terms = problem.chosen_terms();
+            let findings = findings_with_stops(&problem, &terms, &stops);
+            (problem, terms, findings)
+        },
+        || {
+            let train = EffortProblem::new(model, &sig, gravity, &rows, &excluded, &train, rules.clone()).map(|p| {
+                let t = p.chosen_terms();
+                (p, t)
+            });
+            let train_findings = train.as_ref().map(|(p, t)| findings_with_stops(p, t, &stops));
+            (train, train_findings)
+        },
+    );
     Some(Identified { band, sig, rows, problem, terms, train, stops, findings, train_findings, overruled: Vec::new() })
 }
 
@@ -686,9 +696,11 @@ pub(super) fn analyze_effort_space(
     let findings = found.findings_with_overruled();
     let Identified { band, sig, rows, train_findings, .. } = found;
     let rows = rows.as_slice();
-    let before = replay_from(&tree, &nominal_physics, &input, &sig, start);
     let (physics, tree_fitted) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(&findings));
-    let after = replay_from(&tree_fitted, &physics, &input, &sig, start);
+    let (before, after) = rayon::join(
+        || replay_from(&tree, &nominal_physics, &input, &sig, start),
+        || replay_from(&tree_fitted, &physics, &input, &sig, start),
+    );
     // The settling replayed the training findings it kept; otherwise they are replayed here.
     let held = settled.or_else(|| train_findings.as_ref().map(|f| replay.replay(f, &sig, horizon_s)));
 
@@ -754,7 +766,8 @@ fn replay_start(sig: &Signals, t_s: f64) -> Option<usize> {
 }
 
 /// Replays from `from_s` to the end in pieces of `horizon_s`, each from the smoothed measured
-/// state at its start (NaN before `from_s`).
+/// state at its start (NaN before `from_s`). The pieces are independent, so they run in
+/// parallel; each writes only its own samples.
 fn replay_pieces(
     tree: &MultiBody,
     physics: &[JointPhysics],
@@ -764,12 +777,19 @@ fn replay_pieces(
     horizon_s: f64,
 ) -> Vec<Vec<f64>> {
     let n = input.time_s.len();
-    let mut out = vec![vec![f64::NAN; n]; sig.q.len()];
+    let mut spans = Vec::new();
     let mut next = replay_start(sig, from_s);
     while let Some(s) = next {
         let end = input.time_s.partition_point(|&t| t < input.time_s[s] + horizon_s).clamp(s + 1, n);
-        replay_span(tree, physics, input, sig, s..end, &mut out);
+        spans.push(s..end);
         next = if end < n { replay_start(sig, input.time_s[end]).filter(|&i| i >= end) } else { None };
+    }
+    let pieces: Vec<Vec<Vec<f64>>> = spans.par_iter().map(|span| replay_span(tree, physics, input, sig, span.clone())).collect();
+    let mut out = vec![vec![f64::NAN; n]; sig.q.len()];
+    for (span, piece) in spans.iter().zip(pieces) {
+        for (d, q) in piece.into_iter().enumerate() {
+            out[d][span.clone()].copy_from_slice(&q);
+        }
     }
     out
 }
@@ -779,28 +799,28 @@ fn replay_from(tree: &MultiBody, physics: &[JointPhysics], input: &ChainInput<'_
     let n = input.time_s.len();
     let mut out = vec![vec![f64::NAN; n]; sig.q.len()];
     if let Some(s) = start {
-        replay_span(tree, physics, input, sig, s..n, &mut out);
+        for (d, q) in replay_span(tree, physics, input, sig, s..n).into_iter().enumerate() {
+            out[d][s..n].copy_from_slice(&q);
+        }
     }
     out
 }
 
-/// Replays samples `span` from the smoothed state at its first sample into `out[d][span]`.
+/// Replays samples `span` from the smoothed state at its first sample: per dof, its positions
+/// over the span.
 fn replay_span(
     tree: &MultiBody,
     physics: &[JointPhysics],
     input: &ChainInput<'_>,
     sig: &Signals,
     span: std::ops::Range<usize>,
-    out: &mut [Vec<f64>],
-) {
+) -> Vec<Vec<f64>> {
     let s = span.start;
     let effort: Vec<Vec<f64>> = input.effort.iter().map(|e| e.get(span.clone()).map_or_else(Vec::new, <[f64]>::to_vec)).collect();
-    let piece = ChainInput { time_s: &input.time_s[span.clone()], effort: &effort, gravity: input.gravity };
+    let piece = ChainInput { time_s: &input.time_s[span], effort: &effort, gravity: input.gravity };
     let q0: Vec<f64> = sig.q.iter().map(|d| d[s][0]).collect();
     let v0: Vec<f64> = sig.q.iter().map(|d| d[s][1]).collect();
-    for (d, q) in replay(tree, physics, &piece, &q0, &v0).into_iter().enumerate() {
-        out[d][span.clone()].copy_from_slice(&q);
-    }
+    replay(tree, physics, &piece, &q0, &v0)
 }
 
 fn joint_outcome(

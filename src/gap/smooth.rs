@@ -58,8 +58,14 @@ pub fn local_cubic(time_s: &[f64], y: &[f64], half_width_s: f64) -> Vec<[f64; 3]
 /// dropouts are handled by the normalisation (a kernel average, Nadaraya–Watson).
 #[derive(Debug, Clone)]
 pub struct Smoother {
-    /// Per output time: (sample index, weight); empty where no valid sample is in reach.
-    weights: Vec<Vec<(usize, f64)>>,
+    /// Per output time: its taps' range in `index` and `weight` (empty where no valid sample is
+    /// in reach), and its first sample where the taps' samples are consecutive (no dropout in
+    /// reach: the weights then meet the signal as one slice).
+    taps: Vec<(std::ops::Range<usize>, Option<usize>)>,
+    /// Sample index of each tap.
+    index: Vec<usize>,
+    /// Normalised weight of each tap.
+    weight: Vec<f64>,
 }
 
 /// Reach of the Gaussian filter in σ (weights below e^−4.5 ≈ 1 % are dropped).
@@ -77,29 +83,40 @@ impl Smoother {
         let idx: Vec<usize> = (0..time_s.len()).filter(|&i| valid[i] && time_s[i].is_finite()).collect();
         let times: Vec<f64> = idx.iter().map(|&i| time_s[i]).collect();
         let reach = GAUSS_SUPPORT_SIGMAS * sigma_s;
-        let weights = eval_s
-            .iter()
-            .map(|&t0| {
-                if !t0.is_finite() {
-                    return Vec::new();
-                }
+        let (mut taps, mut index, mut weight) = (Vec::with_capacity(eval_s.len()), Vec::new(), Vec::new());
+        for &t0 in eval_s {
+            let from = index.len();
+            if t0.is_finite() {
                 let lo = times.partition_point(|&t| t < t0 - reach);
                 let hi = times.partition_point(|&t| t <= t0 + reach);
-                let raw: Vec<(usize, f64)> = (lo..hi).map(|k| (idx[k], (-0.5 * ((times[k] - t0) / sigma_s).powi(2)).exp())).collect();
-                let total: f64 = raw.iter().map(|(_, w)| w).sum();
-                if total <= 0.0 {
-                    return Vec::new();
+                let raw: Vec<f64> = (lo..hi).map(|k| (-0.5 * ((times[k] - t0) / sigma_s).powi(2)).exp()).collect();
+                let total: f64 = raw.iter().sum();
+                if total > 0.0 {
+                    index.extend_from_slice(&idx[lo..hi]);
+                    weight.extend(raw.into_iter().map(|w| w / total));
                 }
-                raw.into_iter().map(|(i, w)| (i, w / total)).collect()
-            })
-            .collect();
-        Self { weights }
+            }
+            let run = &index[from..];
+            let consecutive = run.first().filter(|&&first| run.iter().enumerate().all(|(k, &i)| i == first + k)).copied();
+            taps.push((from..index.len(), consecutive));
+        }
+        Self { taps, index, weight }
     }
 
     /// The filtered signal: NaN where no sample is in reach or a value in reach is not finite.
     #[must_use]
     pub fn apply(&self, y: &[f64]) -> Vec<f64> {
-        self.weights.iter().map(|w| if w.is_empty() { f64::NAN } else { w.iter().map(|&(i, c)| c * y[i]).sum() }).collect()
+        self.taps
+            .iter()
+            .map(|(range, consecutive)| {
+                let w = &self.weight[range.clone()];
+                match consecutive {
+                    _ if w.is_empty() => f64::NAN,
+                    Some(first) => w.iter().zip(&y[*first..first + w.len()]).map(|(c, v)| c * v).sum(),
+                    None => w.iter().zip(&self.index[range.clone()]).map(|(c, &i)| c * y[i]).sum(),
+                }
+            })
+            .collect()
     }
 }
 
@@ -141,6 +158,29 @@ mod tests {
         let fast: Vec<f64> = time.iter().map(|t| (std::f64::consts::TAU * 3.0 * f_half * t).sin()).collect();
         let peak = filter.apply(&fast)[500..1500].iter().fold(0.0f64, |m, v| m.max(v.abs()));
         assert!(peak < 1e-2, "gain {peak} at three times the cut-off");
+    }
+
+    #[test]
+    fn the_gaussian_filter_skips_a_dropout_and_weighs_its_neighbours_by_their_distance() {
+        // Regression guard for the filter's two layouts (consecutive taps, and taps around a
+        // dropout): both must be the normalised Gaussian average of the valid samples in reach.
+        let time: Vec<f64> = (0..400).map(|i| f64::from(i) * 0.005).collect();
+        let y: Vec<f64> = time.iter().map(|t| (7.0 * t).sin() + 0.3 * (23.0 * t).cos()).collect();
+        let mut valid = vec![true; time.len()];
+        valid[200] = false;
+        // Reach 0.0639 s: no sample at its edge, where rounding would decide.
+        let sigma = 0.0213;
+        let filter = Smoother::new(&time, &valid, &time, sigma);
+        let out = filter.apply(&y);
+        for i in [10, 195, 200, 203, 390] {
+            let (mut num, mut den) = (0.0, 0.0);
+            for k in (0..time.len()).filter(|&k| valid[k] && (time[k] - time[i]).abs() <= GAUSS_SUPPORT_SIGMAS * sigma) {
+                let w = (-0.5 * ((time[k] - time[i]) / sigma).powi(2)).exp();
+                num += w * y[k];
+                den += w;
+            }
+            assert!((out[i] - num / den).abs() < 1e-12, "sample {i}: {} vs {}", out[i], num / den);
+        }
     }
 
     #[test]
