@@ -1,0 +1,209 @@
+#!/usr/bin/env python3
+"""Multi-joint arm recordings made by Bullet (PyPI pybullet, its multibody solver), of a robot other than the
+MuJoCo arm suite's: the KUKA LBR iiwa 7 R800 that ships with pybullet_data (kuka_iiwa/model.urdf), driven by
+torques for 20 s at 200 Hz, the size of recording issue 16 budgets. The same case format as gap_suite.py, cases
+named bullet_iiwa_*.
+
+    gap_suite_bullet_arms.py --out DIR [--seed N] [--only PATTERN]
+
+Needs the pinned packages of gap_suite_requirements.txt (pybullet, numpy; mujoco only because gap_suite.py, whose
+helpers this uses, imports it). Every case is a folder DIR/<case>/ with model.urdf, recording.csv and truth.json
+exactly as gap_suite.py describes them; truth.json's "engine" is "pybullet <version>".
+
+Model: pybullet_data's kuka_iiwa/model.urdf as shipped (its masses, centres of mass and inertia tensors), with the
+visual and collision elements removed (no contact, no meshes needed) and its <dynamics damping="0.5"> removed (the
+damping a case adds is the only damping, so model.urdf says none). The engine loads that same text
+(URDF_USE_INERTIA_FROM_FILE); the identified-model case then writes model.urdf with every link's mass and inertia
+tensor scaled alike by a factor drawn within +-5 % (an identified model's error), the engine keeping the shipped
+values.
+
+Engine: pybullet DIRECT, fixed base, gravity -9.81 z, 1 ms steps, every link's linear and angular damping 0 (Bullet
+damps every link by default). Efforts are TORQUE_CONTROL forces set again before every step (Bullet clears them
+after each one), held between samples as the spec says. Concealed effects, each made the way Bullet users make it:
+  coulomb_friction  a VELOCITY_CONTROL motor at target speed 0 whose force bound is the friction level (pybullet's
+                    joint-friction idiom): a bounded impulse that sticks
+  viscous_damping   changeDynamics(jointDamping=b), checked to act as -b*qd (gap_suite.check_bullet_joint_damping)
+Excitation: gap_suite.arm_excitation, the MuJoCo arm suite's: computed torque with model.urdf (1.5 Hz, damping
+ratio 0.7) around a slow 3-sine target inside the joint ranges, plus 3 sines per joint, decided at 200 Hz and held.
+Noise: 1e-4 rad on positions, 1 % of each joint's RMS effort on efforts. The friction levels are sized to what the
+excitation asks of each joint (this model's wrist links are light: 0.001-0.01 kg m^2 about their axes), so that
+every joint slides.
+"""
+import os
+import re
+from dataclasses import dataclass, field
+from importlib import metadata
+
+import numpy as np
+import pybullet
+import pybullet_data
+
+import gap_suite as gs
+from gap_suite import DT
+
+DURATION_S, RATE_HZ = 20.0, 200
+HOME = np.array([0.0, 0.6, 0.0, -1.2, 0.0, 0.8, 0.0])
+JOINTS = [f"lbr_iiwa_joint_{i}" for i in range(1, 8)]
+ENGINE = f"pybullet {metadata.version('pybullet')}"
+
+
+@dataclass
+class Effect:
+    joint: str
+    kind: str
+    params: dict
+
+
+@dataclass
+class ArmCase:
+    name: str
+    description: str
+    friction: list = field(default_factory=lambda: [0.0] * 7)
+    damping: list = field(default_factory=lambda: [0.0] * 7)
+    model_error: float = 0.0
+    engine: str = "bullet"
+    duration: float = DURATION_S
+    rate: int = RATE_HZ
+
+    @property
+    def effects(self):
+        """The concealed effects, as truth.json names them."""
+        out = [Effect(n, "coulomb_friction", {"friction": float(f)}) for n, f in zip(JOINTS, self.friction) if f > 0]
+        return out + [Effect(n, "viscous_damping", {"damping": float(b)}) for n, b in zip(JOINTS, self.damping) if b > 0]
+
+
+FRICTION = [2.0, 2.0, 0.8, 0.8, 0.03, 0.02, 0.003]
+
+
+def cases():
+    return [
+        ArmCase("bullet_iiwa_none", "iiwa; nothing missing"),
+        ArmCase("bullet_iiwa_friction", "iiwa; dry friction on every joint", friction=FRICTION),
+        ArmCase("bullet_iiwa_damping", "iiwa; damping on joints 1, 3, 5, 7", damping=[1.0, 0.0, 0.3, 0.0, 0.005, 0.0, 0.0005]),
+        ArmCase("bullet_iiwa_mixed", "iiwa; dry friction on joints 1, 3, 5, damping on 2, 4, 6",
+                friction=[2.0, 0.0, 0.8, 0.0, 0.03, 0.0, 0.0], damping=[0.0, 1.0, 0.0, 0.3, 0.0, 0.004, 0.0]),
+        ArmCase("bullet_iiwa_identified_model", "iiwa; dry friction on every joint, model.urdf's inertias up to 5 % off",
+                friction=FRICTION, model_error=0.05),
+    ]
+
+
+def shipped_urdf():
+    """pybullet_data's iiwa without geometry and without its own joint damping."""
+    with open(os.path.join(pybullet_data.getDataPath(), "kuka_iiwa", "model.urdf"), encoding="utf-8") as f:
+        text = f.read()
+    text = re.sub(r'\s*<dynamics damping="[^"]*"/>', "", text)
+    return re.sub(r"\s*<(visual|collision)>.*?</\1>", "", text, flags=re.S)
+
+
+def identified(text, share, rng):
+    """Each link's mass and inertia tensor scaled alike by 1 + U(-share, share) (its centre of mass kept)."""
+
+    def link(match):
+        factor = 1.0 + rng.uniform(-share, share)
+        scaled = re.sub(r'(<mass value=")([^"]+)(")', lambda m: f"{m[1]}{float(m[2]) * factor:.9g}{m[3]}", match[0])
+        return re.sub(r'(i[xyz]{2}=")([^"]+)(")', lambda m: f"{m[1]}{float(m[2]) * factor:.9g}{m[3]}", scaled)
+
+    return re.sub(r"<inertial>.*?</inertial>", link, text, flags=re.S)
+
+
+class BulletArm:
+    """The iiwa in pybullet DIRECT: TORQUE_CONTROL before every step, friction motors, joint damping."""
+
+    def __init__(self, text, friction, damping):
+        self.cid = pybullet.connect(pybullet.DIRECT)
+        path = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"gap_suite_bullet_arm_{os.getpid()}.urdf")
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text)
+        try:
+            self.body = pybullet.loadURDF(path, useFixedBase=True, flags=pybullet.URDF_USE_INERTIA_FROM_FILE,
+                                          physicsClientId=self.cid)
+        finally:
+            os.remove(path)
+        pybullet.setTimeStep(DT, physicsClientId=self.cid)
+        pybullet.setGravity(*gs.GRAVITY, physicsClientId=self.cid)
+        count = pybullet.getNumJoints(self.body, physicsClientId=self.cid)
+        index = {pybullet.getJointInfo(self.body, i, physicsClientId=self.cid)[1].decode(): i for i in range(count)}
+        self.names, self.idx = JOINTS, [index[n] for n in JOINTS]
+        info = [pybullet.getJointInfo(self.body, i, physicsClientId=self.cid) for i in self.idx]
+        self.lo, self.hi = np.array([x[8] for x in info]), np.array([x[9] for x in info])
+        for link in range(-1, count):
+            pybullet.changeDynamics(self.body, link, linearDamping=0.0, angularDamping=0.0, physicsClientId=self.cid)
+        for i, b in zip(self.idx, damping):
+            pybullet.changeDynamics(self.body, i, jointDamping=float(b), physicsClientId=self.cid)
+        pybullet.setJointMotorControlArray(self.body, self.idx, pybullet.VELOCITY_CONTROL, targetVelocities=[0.0] * 7,
+                                           forces=[float(f) for f in friction], physicsClientId=self.cid)
+        self.effort = np.zeros(7)
+
+    def set_state(self, q, qd):
+        for i, qi, vi in zip(self.idx, q, qd):
+            pybullet.resetJointState(self.body, i, float(qi), float(vi), physicsClientId=self.cid)
+
+    def state(self):
+        states = pybullet.getJointStates(self.body, self.idx, physicsClientId=self.cid)
+        return np.array([s[0] for s in states]), np.array([s[1] for s in states])
+
+    def hold(self, effort):
+        self.effort = np.asarray(effort, float).copy()
+
+    def advance(self, steps):
+        for _ in range(steps):
+            pybullet.setJointMotorControlArray(self.body, self.idx, pybullet.TORQUE_CONTROL, forces=list(self.effort),
+                                               physicsClientId=self.cid)
+            pybullet.stepSimulation(physicsClientId=self.cid)
+
+    def dynamics(self, q, qd):
+        m = np.array(pybullet.calculateMassMatrix(self.body, list(map(float, q)), physicsClientId=self.cid))
+        bias = pybullet.calculateInverseDynamics(self.body, list(map(float, q)), list(map(float, qd)), [0.0] * 7,
+                                                 physicsClientId=self.cid)
+        return m, np.array(bias)
+
+    def close(self):
+        pybullet.disconnect(self.cid)
+
+
+def run_case(case, seed, out):
+    rng = gs.case_rng(seed, case.name)
+    engine_text = shipped_urdf()
+    model_text = identified(engine_text, case.model_error, rng) if case.model_error > 0 else engine_text
+    nominal = BulletArm(model_text, [0.0] * 7, [0.0] * 7)
+    plant = BulletArm(engine_text, case.friction, case.damping)
+    q0, source = gs.arm_excitation(nominal, np.zeros(7), HOME, plant.lo, plant.hi, rng)
+    traj = gs.simulate(plant, gs.sample_steps(case.duration, case.rate, False, rng), q0, source)
+    plant.close()
+    table = {"time": traj.t}
+    table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(JOINTS)})
+    effort_sigma = {n: 0.01 * gs.rms(traj.effort[:, i]) for i, n in enumerate(JOINTS)}
+    table.update({f"{n}.effort": traj.effort[:, i] + rng.normal(0.0, effort_sigma[n], len(traj.t))
+                  for i, n in enumerate(JOINTS)})
+    folder = os.path.join(out, case.name)
+    os.makedirs(folder, exist_ok=True)
+    note = "<!-- pybullet_data kuka_iiwa/model.urdf without geometry and without its joint damping"
+    note += "; inertial parameters drawn up to 5 % off (an identified model) -->" if case.model_error > 0 else " -->"
+    with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
+        f.write(model_text.replace("<robot ", f"{note}\n<robot ", 1))
+    gs.write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf", "gravity": "0 0 -9.81"})
+    effects = case.effects
+    model_effort = gs.inverse_dynamics(nominal, traj, np.gradient(traj.qd, traj.t, axis=0))
+    nominal.close()
+    detail = {"coulomb_friction": "VELOCITY_CONTROL motor, target speed 0, force bound = friction",
+              "viscous_damping": "changeDynamics(jointDamping)"}
+    truth = {
+        "format": gs.TRUTH_FORMAT, "engine": ENGINE, "case": case.name, "description": case.description,
+        "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params, "engine_detail": detail[e.kind]} for e in effects],
+        "joints": JOINTS,
+        "engine_detail": f"{ENGINE}, pybullet_data kuka_iiwa/model.urdf (no geometry, no joint damping of its own), DIRECT, "
+                         f"fixed base, {DT} s steps, link damping 0, torques through TORQUE_CONTROL set before every step",
+        "seed": seed, "duration_s": case.duration, "rate_hz": case.rate, "timestep_s": DT, "sampling": "uniform",
+        "observed": "joint positions",
+        "noise": {"q_rad": 1e-4, **{f"{n}.effort": gs.sig3(s) for n, s in effort_sigma.items()}},
+        "dropouts": 0.0,
+        "excitation": "computed torque with model.urdf (1.5 Hz, damping ratio 0.7) around a slow 3-sine target "
+                      "(0.05-0.3 Hz) + 3 sines per joint (0.5-3 Hz), decided at 200 Hz and held (gap_suite.arm_excitation)",
+        "visibility_effort_share": gs.effect_shares(effects, JOINTS, traj, model_effort),
+    }
+    gs.write_json(os.path.join(folder, "truth.json"), truth)
+    return gs.summary_line(case, traj, truth)
+
+
+if __name__ == "__main__":
+    gs.engine_suite_main(cases, run_case, checks=[("viscous_damping", gs.check_bullet_joint_damping)])
