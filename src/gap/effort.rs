@@ -1536,9 +1536,12 @@ impl EffortProblem<'_> {
     /// friction on a loaded shoulder gave a "break-away" 1.8× the sliding level, 1.7σ from none.
     /// So is friction that differs by direction by less than a weight error could
     /// ([`Self::asymmetry_within_weight_error`]), and a refinement whose change over its best
-    /// base law is under [`SelectionRules::min_effort_share`] of the joint's effort. It is
-    /// replaced by the base-law variant on its joint that fits best, if that passes on its own,
-    /// and dropped otherwise.
+    /// base law is under [`SelectionRules::min_effort_share`] of the joint's effort, or that cuts
+    /// the held-out error of that best base law by less than [`SelectionRules::min_cv_gain`]
+    /// (Bullet's ideal friction motor on an iiwa read as a Stribeck law breaking away at
+    /// 1.2-1.3× its sliding level, 1.3-1.4 % better than Coulomb's). It is replaced by the
+    /// base-law variant on its joint that fits best, if that passes on its own, and dropped
+    /// otherwise.
     fn settle_refinements(&self, chosen: &mut Vec<usize>, banned: &[bool]) {
         let folds = self.rules.folds.max(2);
         loop {
@@ -1550,11 +1553,19 @@ impl EffortProblem<'_> {
                 let excess = self.refinement_excess(c, &fitted.theta);
                 // What the refinement changes over its best base law must matter too (it may
                 // have entered whole, judged by its full size).
+                let row = self.candidates[c].row;
                 let immaterial = base.as_ref().is_some_and(|(b, e)| {
                     let change = self.change_rms(c, &fitted.theta, Some((*b, &e.theta)));
-                    change < self.rules.min_effort_share * self.rows[self.candidates[c].row].effort_rms
+                    change < self.rules.min_effort_share * self.rows[row].effort_rms
                 });
-                (excess.abs() < 2.0 * jackknife_sd(&jack, folds) || self.asymmetry_within_weight_error(c, excess) || immaterial)
+                // And it must cut what its best base law leaves, as any term must
+                // (`min_cv_gain`): it may have entered against a worse base law than the one
+                // the final terms around it make best.
+                let thin = base.as_ref().is_some_and(|(_, e)| {
+                    let (b, a) = (e.row_sse(row), fitted.row_sse(row));
+                    b > 0.0 && (b - a) / b < self.rules.min_cv_gain
+                });
+                (excess.abs() < 2.0 * jackknife_sd(&jack, folds) || self.asymmetry_within_weight_error(c, excess) || immaterial || thin)
                     .then_some((rest, base))
             });
             let Some((rest, base)) = doubtful else { return };
