@@ -106,10 +106,11 @@ def identified(text, share, rng):
     return re.sub(r"<inertial>.*?</inertial>", link, text, flags=re.S)
 
 
-class BulletArm:
-    """The iiwa in pybullet DIRECT: TORQUE_CONTROL before every step, friction motors, joint damping."""
+class BulletArm(gs.BulletSim):
+    """The iiwa in pybullet DIRECT, loaded from URDF text: gap_suite.BulletSim's stepping (TORQUE_CONTROL before
+    every step), state and dynamics, with friction motors and joint damping per joint."""
 
-    def __init__(self, text, friction, damping):
+    def __init__(self, text, friction, damping):  # noqa: super().__init__ builds from gap_suite's mechanisms
         self.cid = pybullet.connect(pybullet.DIRECT)
         path = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"gap_suite_bullet_arm_{os.getpid()}.urdf")
         with open(path, "w", encoding="utf-8") as f:
@@ -121,44 +122,20 @@ class BulletArm:
             os.remove(path)
         pybullet.setTimeStep(DT, physicsClientId=self.cid)
         pybullet.setGravity(*gs.GRAVITY, physicsClientId=self.cid)
-        count = pybullet.getNumJoints(self.body, physicsClientId=self.cid)
-        index = {pybullet.getJointInfo(self.body, i, physicsClientId=self.cid)[1].decode(): i for i in range(count)}
+        infos = [pybullet.getJointInfo(self.body, i, physicsClientId=self.cid)
+                 for i in range(pybullet.getNumJoints(self.body, physicsClientId=self.cid))]
+        index = {info[1].decode(): info[0] for info in infos}
+        self.link_index = {info[12].decode(): info[0] for info in infos}
         self.names, self.idx = JOINTS, [index[n] for n in JOINTS]
-        info = [pybullet.getJointInfo(self.body, i, physicsClientId=self.cid) for i in self.idx]
-        self.lo, self.hi = np.array([x[8] for x in info]), np.array([x[9] for x in info])
-        for link in range(-1, count):
+        self.dof = [sorted(self.idx).index(i) for i in self.idx]
+        self.lo, self.hi = np.array([infos[i][8] for i in self.idx]), np.array([infos[i][9] for i in self.idx])
+        for link in [-1] + list(range(len(infos))):  # Bullet damps every link by default
             pybullet.changeDynamics(self.body, link, linearDamping=0.0, angularDamping=0.0, physicsClientId=self.cid)
         for i, b in zip(self.idx, damping):
             pybullet.changeDynamics(self.body, i, jointDamping=float(b), physicsClientId=self.cid)
         pybullet.setJointMotorControlArray(self.body, self.idx, pybullet.VELOCITY_CONTROL, targetVelocities=[0.0] * 7,
                                            forces=[float(f) for f in friction], physicsClientId=self.cid)
         self.effort = np.zeros(7)
-
-    def set_state(self, q, qd):
-        for i, qi, vi in zip(self.idx, q, qd):
-            pybullet.resetJointState(self.body, i, float(qi), float(vi), physicsClientId=self.cid)
-
-    def state(self):
-        states = pybullet.getJointStates(self.body, self.idx, physicsClientId=self.cid)
-        return np.array([s[0] for s in states]), np.array([s[1] for s in states])
-
-    def hold(self, effort):
-        self.effort = np.asarray(effort, float).copy()
-
-    def advance(self, steps):
-        for _ in range(steps):
-            pybullet.setJointMotorControlArray(self.body, self.idx, pybullet.TORQUE_CONTROL, forces=list(self.effort),
-                                               physicsClientId=self.cid)
-            pybullet.stepSimulation(physicsClientId=self.cid)
-
-    def dynamics(self, q, qd):
-        m = np.array(pybullet.calculateMassMatrix(self.body, list(map(float, q)), physicsClientId=self.cid))
-        bias = pybullet.calculateInverseDynamics(self.body, list(map(float, q)), list(map(float, qd)), [0.0] * 7,
-                                                 physicsClientId=self.cid)
-        return m, np.array(bias)
-
-    def close(self):
-        pybullet.disconnect(self.cid)
 
 
 def run_case(case, seed, out):
