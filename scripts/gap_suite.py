@@ -3,7 +3,7 @@
 
     gap_suite.py --out DIR [--seed N] [--only PATTERN]            objects (issue 10)
     gap_suite.py --arms --out DIR [--seed N] [--only PATTERN]     arms by MuJoCo (issue 16)
-                 [--arm-source auto|menagerie|builtin]
+                 [--arm-source auto|menagerie|builtin] [--arm-duration S]
 
 PATTERN is an fnmatch pattern on the case name ('mj_door*'). Needs the pinned packages of
 gap_suite_requirements.txt beside this file (mujoco, pybullet, numpy, mujoco-menagerie).
@@ -1975,8 +1975,12 @@ def identification_error(mech, share, rng):
     return out
 
 
-def run_arm_case(case, seed, out, mode):
-    """Drives the original arm (plus the case's effects) and writes DIR/<case>/."""
+# Length of an arm recording, s (--arm-duration; issue 16 budgets the analysis of 20 s).
+ARM_DURATION_S = 10.0
+
+
+def run_arm_case(case, seed, out, mode, duration=ARM_DURATION_S):
+    """Drives the original arm (plus the case's effects) for `duration` s and writes DIR/<case>/."""
     rng = case_rng(seed, case.name)
     source = ARMS[case.arm]
     path, origin = arm_xml(case.arm, mode)
@@ -2002,7 +2006,7 @@ def run_arm_case(case, seed, out, mode):
              else MujocoSim(spec.compile(), names))
     armature = np.array([defaults[n]["armature"] for n in names])
     q0, source_fn = arm_excitation(nominal, armature, source.home, lo, hi, rng)
-    traj = simulate(plant, sample_steps(10.0, 200, False, rng), q0, source_fn)
+    traj = simulate(plant, sample_steps(duration, 200, False, rng), q0, source_fn)
     table = {"time": traj.t}
     table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(names)})
     effort_sigma = {n: 0.01 * rms(traj.effort[:, i]) for i, n in enumerate(names)}
@@ -2025,7 +2029,7 @@ def run_arm_case(case, seed, out, mode):
                          f"{mujoco.mjtIntegrator(rigid.opt.integrator).name}, {DT} s steps, torques through qfrc_applied "
                          "held between samples; model.urdf verified against the compiled model (mj_fullM, qfrc_bias) "
                          f"to {RIGID_RTOL:g}",
-        "seed": seed, "duration_s": 10.0, "rate_hz": 200, "timestep_s": DT, "sampling": "uniform",
+        "seed": seed, "duration_s": duration, "rate_hz": 200, "timestep_s": DT, "sampling": "uniform",
         "observed": "joint positions", "noise": {"q_rad": 1e-4, **{f"{n}.effort": sig3(s) for n, s in effort_sigma.items()}},
         "dropouts": 0.0,
         "excitation": "computed torque with model.urdf + the arm's own armature (1.5 Hz, damping ratio 0.7) around a "
@@ -2033,7 +2037,7 @@ def run_arm_case(case, seed, out, mode):
         "visibility_effort_share": effect_shares(effects, names, traj, model_effort),
     }
     write_json(os.path.join(folder, "truth.json"), truth)
-    return summary_line(ArmRun(case.name, "mujoco", 10.0, 200), traj, truth)
+    return summary_line(ArmRun(case.name, "mujoco", duration, 200), traj, truth)
 
 
 @dataclass
@@ -2077,6 +2081,8 @@ def parse_args():
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--only", default="*", help="fnmatch pattern on case names")
     parser.add_argument("--arms", action="store_true", help="the multi-joint arms of issue 16 instead of the objects")
+    parser.add_argument("--arm-duration", type=float, default=ARM_DURATION_S,
+                        help=f"length of each arm recording, s (default {ARM_DURATION_S:g})")
     parser.add_argument("--arm-source", choices=("auto", "menagerie", "builtin"), default="auto",
                         help="arms from mujoco-menagerie, the built-in MJCF, or Menagerie where it can be had (default)")
     return parser.parse_args()
@@ -2087,7 +2093,7 @@ def main():
     start = time.perf_counter()
     if args.arms:
         cases = [c for c in ARM_CASES if fnmatch.fnmatch(c.name, args.only)]
-        run = lambda case: run_arm_case(case, args.seed, args.out, args.arm_source)  # noqa: E731
+        run = lambda case: run_arm_case(case, args.seed, args.out, args.arm_source, args.arm_duration)  # noqa: E731
     else:
         cases = [c for c in mujoco_cases() + bullet_cases() + nothing_missing_cases() if fnmatch.fnmatch(c.name, args.only)]
         if any(c.engine == "bullet" and c.effects for c in cases):
