@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""Multi-joint arm recordings made by Bullet (PyPI pybullet, its multibody solver), of a robot other than the
-MuJoCo arm suite's: the KUKA LBR iiwa 7 R800 that ships with pybullet_data (kuka_iiwa/model.urdf), driven by
+"""Multi-joint arm recordings made by Bullet (PyPI pybullet, its multibody solver), of two robots that ship with
+pybullet_data: the KUKA LBR iiwa 7 R800 (kuka_iiwa/model.urdf), a robot the MuJoCo arm suite does not have, and
+the Franka Panda (franka_panda/panda.urdf: another project's model of an arm that suite builds itself), driven by
 torques for 20 s at 200 Hz, the size of recording issue 16 budgets. The same case format as gap_suite.py, cases
-named bullet_iiwa_*.
+named bullet_iiwa_* and bullet_panda_*.
 
     gap_suite_bullet_arms.py --out DIR [--seed N] [--only PATTERN]
 
@@ -10,9 +11,10 @@ Needs the pinned packages of gap_suite_requirements.txt (pybullet, numpy; mujoco
 helpers this uses, imports it). Every case is a folder DIR/<case>/ with model.urdf, recording.csv and truth.json
 exactly as gap_suite.py describes them; truth.json's "engine" is "pybullet <version>".
 
-Model: pybullet_data's kuka_iiwa/model.urdf as shipped (its masses, centres of mass and inertia tensors), with the
-visual and collision elements removed (no contact, no meshes needed) and its <dynamics damping="0.5"> removed (the
-damping a case adds is the only damping, so model.urdf says none). The engine loads that same text
+Model: the robot's URDF as shipped (its masses, centres of mass and inertia tensors), with the visual and collision
+elements removed (no contact, no meshes needed), any <dynamics damping> removed (the iiwa's 0.5: the damping a case
+adds is the only damping, so model.urdf says none) and the Panda's two finger joints welded (type fixed: the hand is
+one rigid body). The engine loads that same text
 (URDF_USE_INERTIA_FROM_FILE); the identified-model case then writes model.urdf with every link's mass and inertia
 tensor scaled alike by a factor drawn within +-5 % (an identified model's error), the engine keeping the shipped
 values.
@@ -26,8 +28,9 @@ after each one), held between samples as the spec says. Concealed effects, each 
 Excitation: gap_suite.arm_excitation, the MuJoCo arm suite's: computed torque with model.urdf (1.5 Hz, damping
 ratio 0.7) around a slow 3-sine target inside the joint ranges, plus 3 sines per joint, decided at 200 Hz and held.
 Noise: 1e-4 rad on positions, 1 % of each joint's RMS effort on efforts. The friction levels are sized to what the
-excitation asks of each joint (this model's wrist links are light: 0.001-0.01 kg m^2 about their axes), so that
-every joint slides.
+excitation asks of each joint (the iiwa model's wrist links are light: 0.001-0.01 kg m^2 about their axes), so that
+every joint slides, and the damping levels so that each is material (at least 3 % of the joint's effort, the least
+`partscene gap` names; truth.json's visibility_effort_share has each one's share).
 """
 import os
 import re
@@ -42,8 +45,25 @@ import gap_suite as gs
 from gap_suite import DT
 
 DURATION_S, RATE_HZ = 20.0, 200
-HOME = np.array([0.0, 0.6, 0.0, -1.2, 0.0, 0.8, 0.0])
-JOINTS = [f"lbr_iiwa_joint_{i}" for i in range(1, 8)]
+
+
+@dataclass
+class Robot:
+    """An arm of pybullet_data: its URDF (path inside pybullet_data), its 7 joints, the pose the excitation swings
+    about."""
+
+    key: str
+    path: tuple
+    joints: list
+    home: np.ndarray
+
+
+ROBOTS = {
+    "iiwa": Robot("iiwa", ("kuka_iiwa", "model.urdf"), [f"lbr_iiwa_joint_{i}" for i in range(1, 8)],
+                  np.array([0.0, 0.6, 0.0, -1.2, 0.0, 0.8, 0.0])),
+    "panda": Robot("panda", ("franka_panda", "panda.urdf"), [f"panda_joint{i}" for i in range(1, 8)],
+                   np.array([0.0, -0.4, 0.0, -2.0, 0.0, 1.6, 0.8])),
+}
 ENGINE = f"pybullet {metadata.version('pybullet')}"
 
 
@@ -58,6 +78,7 @@ class Effect:
 class ArmCase:
     name: str
     description: str
+    robot: str = "iiwa"
     friction: list = field(default_factory=lambda: [0.0] * 7)
     damping: list = field(default_factory=lambda: [0.0] * 7)
     model_error: float = 0.0
@@ -68,11 +89,13 @@ class ArmCase:
     @property
     def effects(self):
         """The concealed effects, as truth.json names them."""
-        out = [Effect(n, "coulomb_friction", {"friction": float(f)}) for n, f in zip(JOINTS, self.friction) if f > 0]
-        return out + [Effect(n, "viscous_damping", {"damping": float(b)}) for n, b in zip(JOINTS, self.damping) if b > 0]
+        joints = ROBOTS[self.robot].joints
+        out = [Effect(n, "coulomb_friction", {"friction": float(f)}) for n, f in zip(joints, self.friction) if f > 0]
+        return out + [Effect(n, "viscous_damping", {"damping": float(b)}) for n, b in zip(joints, self.damping) if b > 0]
 
 
 FRICTION = [2.0, 2.0, 0.8, 0.8, 0.03, 0.02, 0.003]
+PANDA_FRICTION = [1.0, 1.0, 0.8, 0.8, 0.3, 0.2, 0.05]
 
 
 def cases():
@@ -84,14 +107,21 @@ def cases():
                 friction=[2.0, 0.0, 0.8, 0.0, 0.03, 0.0, 0.0], damping=[0.0, 1.0, 0.0, 0.3, 0.0, 0.004, 0.0]),
         ArmCase("bullet_iiwa_identified_model", "iiwa; dry friction on every joint, model.urdf's inertias up to 5 % off",
                 friction=FRICTION, model_error=0.05),
+        ArmCase("bullet_panda_none", "Panda; nothing missing", robot="panda"),
+        ArmCase("bullet_panda_friction", "Panda; dry friction on every joint", robot="panda", friction=PANDA_FRICTION),
+        ArmCase("bullet_panda_mixed", "Panda; dry friction on joints 1, 3, 5, 7, damping on 2, 4, 6", robot="panda",
+                friction=[1.0, 0.0, 0.8, 0.0, 0.3, 0.0, 0.05], damping=[0.0, 1.0, 0.0, 0.5, 0.0, 0.2, 0.0]),
+        ArmCase("bullet_panda_identified_model", "Panda; dry friction on every joint, model.urdf's inertias up to 5 % off",
+                robot="panda", friction=PANDA_FRICTION, model_error=0.05),
     ]
 
 
-def shipped_urdf():
-    """pybullet_data's iiwa without geometry and without its own joint damping."""
-    with open(os.path.join(pybullet_data.getDataPath(), "kuka_iiwa", "model.urdf"), encoding="utf-8") as f:
+def shipped_urdf(robot):
+    """The robot's pybullet_data URDF without geometry, without joint damping of its own, its fingers welded."""
+    with open(os.path.join(pybullet_data.getDataPath(), *robot.path), encoding="utf-8") as f:
         text = f.read()
     text = re.sub(r'\s*<dynamics damping="[^"]*"/>', "", text)
+    text = text.replace('type="prismatic"', 'type="fixed"')
     return re.sub(r"\s*<(visual|collision)>.*?</\1>", "", text, flags=re.S)
 
 
@@ -107,10 +137,10 @@ def identified(text, share, rng):
 
 
 class BulletArm(gs.BulletSim):
-    """The iiwa in pybullet DIRECT, loaded from URDF text: gap_suite.BulletSim's stepping (TORQUE_CONTROL before
-    every step), state and dynamics, with friction motors and joint damping per joint."""
+    """An arm in pybullet DIRECT, loaded from URDF text: gap_suite.BulletSim's stepping (TORQUE_CONTROL before
+    every step), state and dynamics, with friction motors and joint damping per joint (`joints`, in order)."""
 
-    def __init__(self, text, friction, damping):  # noqa: super().__init__ builds from gap_suite's mechanisms
+    def __init__(self, text, joints, friction, damping):  # noqa: super().__init__ builds from gap_suite's mechanisms
         self.cid = pybullet.connect(pybullet.DIRECT)
         path = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"gap_suite_bullet_arm_{os.getpid()}.urdf")
         with open(path, "w", encoding="utf-8") as f:
@@ -126,7 +156,7 @@ class BulletArm(gs.BulletSim):
                  for i in range(pybullet.getNumJoints(self.body, physicsClientId=self.cid))]
         index = {info[1].decode(): info[0] for info in infos}
         self.link_index = {info[12].decode(): info[0] for info in infos}
-        self.names, self.idx = JOINTS, [index[n] for n in JOINTS]
+        self.names, self.idx = list(joints), [index[n] for n in joints]
         self.dof = [sorted(self.idx).index(i) for i in self.idx]
         self.lo, self.hi = np.array([infos[i][8] for i in self.idx]), np.array([infos[i][9] for i in self.idx])
         for link in [-1] + list(range(len(infos))):  # Bullet damps every link by default
@@ -140,21 +170,24 @@ class BulletArm(gs.BulletSim):
 
 def run_case(case, seed, out):
     rng = gs.case_rng(seed, case.name)
-    engine_text = shipped_urdf()
+    robot = ROBOTS[case.robot]
+    joints = robot.joints
+    engine_text = shipped_urdf(robot)
     model_text = identified(engine_text, case.model_error, rng) if case.model_error > 0 else engine_text
-    nominal = BulletArm(model_text, [0.0] * 7, [0.0] * 7)
-    plant = BulletArm(engine_text, case.friction, case.damping)
-    q0, source = gs.arm_excitation(nominal, np.zeros(7), HOME, plant.lo, plant.hi, rng)
+    nominal = BulletArm(model_text, joints, [0.0] * 7, [0.0] * 7)
+    plant = BulletArm(engine_text, joints, case.friction, case.damping)
+    q0, source = gs.arm_excitation(nominal, np.zeros(7), robot.home, plant.lo, plant.hi, rng)
     traj = gs.simulate(plant, gs.sample_steps(case.duration, case.rate, False, rng), q0, source)
     plant.close()
     table = {"time": traj.t}
-    table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(JOINTS)})
-    effort_sigma = {n: 0.01 * gs.rms(traj.effort[:, i]) for i, n in enumerate(JOINTS)}
+    table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(joints)})
+    effort_sigma = {n: 0.01 * gs.rms(traj.effort[:, i]) for i, n in enumerate(joints)}
     table.update({f"{n}.effort": traj.effort[:, i] + rng.normal(0.0, effort_sigma[n], len(traj.t))
-                  for i, n in enumerate(JOINTS)})
+                  for i, n in enumerate(joints)})
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
-    note = "<!-- pybullet_data kuka_iiwa/model.urdf without geometry and without its joint damping"
+    source_path = "/".join(robot.path)
+    note = f"<!-- pybullet_data {source_path} without geometry and without joint damping, fingers (if any) welded"
     note += "; inertial parameters drawn up to 5 % off (an identified model) -->" if case.model_error > 0 else " -->"
     with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
         f.write(model_text.replace("<robot ", f"{note}\n<robot ", 1))
@@ -167,8 +200,8 @@ def run_case(case, seed, out):
     truth = {
         "format": gs.TRUTH_FORMAT, "engine": ENGINE, "case": case.name, "description": case.description,
         "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params, "engine_detail": detail[e.kind]} for e in effects],
-        "joints": JOINTS,
-        "engine_detail": f"{ENGINE}, pybullet_data kuka_iiwa/model.urdf (no geometry, no joint damping of its own), DIRECT, "
+        "joints": joints,
+        "engine_detail": f"{ENGINE}, pybullet_data {source_path} (no geometry, no joint damping of its own, fingers welded), DIRECT, "
                          f"fixed base, {DT} s steps, link damping 0, torques through TORQUE_CONTROL set before every step",
         "seed": seed, "duration_s": case.duration, "rate_hz": case.rate, "timestep_s": DT, "sampling": "uniform",
         "observed": "joint positions",
@@ -176,7 +209,7 @@ def run_case(case, seed, out):
         "dropouts": 0.0,
         "excitation": "computed torque with model.urdf (1.5 Hz, damping ratio 0.7) around a slow 3-sine target "
                       "(0.05-0.3 Hz) + 3 sines per joint (0.5-3 Hz), decided at 200 Hz and held (gap_suite.arm_excitation)",
-        "visibility_effort_share": gs.effect_shares(effects, JOINTS, traj, model_effort),
+        "visibility_effort_share": gs.effect_shares(effects, joints, traj, model_effort),
     }
     gs.write_json(os.path.join(folder, "truth.json"), truth)
     return gs.summary_line(case, traj, truth)
