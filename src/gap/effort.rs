@@ -550,9 +550,25 @@ struct BlockFit {
     theta_without: Vec<Vec<f64>>,
 }
 
-/// Blocks kept in [`EffortProblem`]'s cache before it starts afresh (a bound on its memory: a
-/// block holds a few dozen numbers).
-const MAX_CACHED_BLOCKS: usize = 200_000;
+/// Entries kept in each of [`EffortProblem`]'s caches before it starts afresh (a bound on their
+/// memory: an entry holds a few dozen numbers).
+const MAX_CACHED: usize = 200_000;
+
+/// The value `cache` holds for `key`, or `compute`'s, then remembered (the cache emptied first
+/// when it holds [`MAX_CACHED`] entries). A poisoned lock only costs the remembering.
+fn remembered<K: std::hash::Hash + Eq, V: Clone>(cache: &Mutex<HashMap<K, V>>, key: K, compute: impl FnOnce() -> V) -> V {
+    if let Some(hit) = cache.lock().ok().and_then(|c| c.get(&key).cloned()) {
+        return hit;
+    }
+    let value = compute();
+    if let Ok(mut c) = cache.lock() {
+        if c.len() >= MAX_CACHED {
+            c.clear();
+        }
+        c.insert(key, value.clone());
+    }
+    value
+}
 
 /// Least RMS speed of a joint over a block's samples, as a share of its RMS speed over all of
 /// them, for the block to show a law of its motion (friction, damping, a rotor's inertia): a
@@ -1184,9 +1200,11 @@ impl EffortProblem<'_> {
     /// asks for the same blocks over and over (every candidate of one joint beside the others'
     /// terms).
     fn fit_block(&self, cols: &[usize]) -> Arc<BlockFit> {
-        if let Some(hit) = self.block_fits.lock().ok().and_then(|cache| cache.get(cols).cloned()) {
-            return hit;
-        }
+        remembered(&self.block_fits, cols.to_vec(), || Arc::new(self.fit_block_afresh(cols)))
+    }
+
+    /// [`Self::fit_block`] without the cache.
+    fn fit_block_afresh(&self, cols: &[usize]) -> BlockFit {
         let k = self.rules.folds.max(2);
         let maps = self.local_maps(cols);
         let touched: Vec<usize> = (0..self.rows.len()).filter(|&r| !maps[r].is_empty()).collect();
@@ -1210,14 +1228,7 @@ impl EffortProblem<'_> {
             }
             theta_without.push(theta);
         }
-        let fit = Arc::new(BlockFit { rows: touched, fold_sse, theta: self.solve(cols, &maps, None), theta_without });
-        if let Ok(mut cache) = self.block_fits.lock() {
-            if cache.len() >= MAX_CACHED_BLOCKS {
-                cache.clear();
-            }
-            cache.insert(cols.to_vec(), Arc::clone(&fit));
-        }
-        fit
+        BlockFit { rows: touched, fold_sse, theta: self.solve(cols, &maps, None), theta_without }
     }
 
     fn evaluate(&self, set: &[usize]) -> Evaluation {
@@ -1275,17 +1286,9 @@ impl EffortProblem<'_> {
         let other = replaced.map(|(r, t)| (r, self.term_parts(r, t)));
         let bits = |parts: &[(f64, &[f64])]| parts.iter().map(|(k, _)| k.to_bits()).collect::<Vec<u64>>();
         let key = (c, bits(&mine), other.as_ref().map(|(r, o)| (*r, bits(o))));
-        if let Some(&hit) = self.change_sizes.lock().ok().as_ref().and_then(|cache| cache.get(&key)) {
-            return hit;
-        }
-        let size = rms((0..n).filter(|&i| self.used[row][i]).map(|i| at(&mine, i) - other.as_ref().map_or(0.0, |(_, o)| at(o, i))));
-        if let Ok(mut cache) = self.change_sizes.lock() {
-            if cache.len() >= MAX_CACHED_BLOCKS {
-                cache.clear();
-            }
-            cache.insert(key, size);
-        }
-        size
+        remembered(&self.change_sizes, key, || {
+            rms((0..n).filter(|&i| self.used[row][i]).map(|i| at(&mine, i) - other.as_ref().map_or(0.0, |(_, o)| at(o, i))))
+        })
     }
 
     /// The member of c's family on c's joint in `set`, other than c.

@@ -766,8 +766,7 @@ fn replay_start(sig: &Signals, t_s: f64) -> Option<usize> {
 }
 
 /// Replays from `from_s` to the end in pieces of `horizon_s`, each from the smoothed measured
-/// state at its start (NaN before `from_s`). The pieces are independent, so they run in
-/// parallel; each writes only its own samples.
+/// state at its start (NaN before `from_s`).
 fn replay_pieces(
     tree: &MultiBody,
     physics: &[JointPhysics],
@@ -784,23 +783,30 @@ fn replay_pieces(
         spans.push(s..end);
         next = if end < n { replay_start(sig, input.time_s[end]).filter(|&i| i >= end) } else { None };
     }
-    let pieces: Vec<Vec<Vec<f64>>> = spans.par_iter().map(|span| replay_span(tree, physics, input, sig, span.clone())).collect();
-    let mut out = vec![vec![f64::NAN; n]; sig.q.len()];
-    for (span, piece) in spans.iter().zip(pieces) {
-        for (d, q) in piece.into_iter().enumerate() {
-            out[d][span.clone()].copy_from_slice(&q);
-        }
-    }
-    out
+    replay_spans(tree, physics, input, sig, &spans)
 }
 
 /// A replay from sample `start`'s smoothed state (NaN before it; all NaN without a start).
 fn replay_from(tree: &MultiBody, physics: &[JointPhysics], input: &ChainInput<'_>, sig: &Signals, start: Option<usize>) -> Vec<Vec<f64>> {
-    let n = input.time_s.len();
-    let mut out = vec![vec![f64::NAN; n]; sig.q.len()];
-    if let Some(s) = start {
-        for (d, q) in replay_span(tree, physics, input, sig, s..n).into_iter().enumerate() {
-            out[d][s..n].copy_from_slice(&q);
+    let spans: Vec<std::ops::Range<usize>> = start.map(|s| s..input.time_s.len()).into_iter().collect();
+    replay_spans(tree, physics, input, sig, &spans)
+}
+
+/// Per dof and sample, the replays of `spans` (each from the smoothed state at its first sample;
+/// NaN outside them). The spans are independent, so they run in parallel; each writes only its
+/// own samples.
+fn replay_spans(
+    tree: &MultiBody,
+    physics: &[JointPhysics],
+    input: &ChainInput<'_>,
+    sig: &Signals,
+    spans: &[std::ops::Range<usize>],
+) -> Vec<Vec<f64>> {
+    let pieces: Vec<Vec<Vec<f64>>> = spans.par_iter().map(|span| replay_span(tree, physics, input, sig, span.clone())).collect();
+    let mut out = vec![vec![f64::NAN; input.time_s.len()]; sig.q.len()];
+    for (span, piece) in spans.iter().zip(pieces) {
+        for (d, q) in piece.into_iter().enumerate() {
+            out[d][span.clone()].copy_from_slice(&q);
         }
     }
     out
