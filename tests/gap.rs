@@ -1199,3 +1199,18 @@ fn friction_as_wide_as_the_motion_is_not_damping_and_damping_is_not_wide_frictio
         }
     }
 }
+
+/// Effort space's fitted centres of mass (the model's own accuracy) go into the fitted URDF's
+/// `<inertial><origin>`; the links it did not move keep theirs.
+#[test]
+fn the_fitted_urdf_carries_the_centres_of_mass_effort_space_moved() {
+    let model = model();
+    let moved = model.links.iter().find(|l| l.mass_kg > 0.0).expect("a link with mass");
+    let shift = [0.002, -0.001, 0.003];
+    let text = partscene::gap::report::fitted_urdf(&model, &[], &[(moved.name.clone(), shift)].into_iter().collect()).expect("writes");
+    let fitted = parse_model(&text, Path::new("f.urdf")).expect("fitted URDF parses");
+    for (before, after) in model.links.iter().zip(&fitted.links) {
+        let want = if before.name == moved.name { before.com_link_m + glam::DVec3::from_array(shift) } else { before.com_link_m };
+        assert!((after.com_link_m - want).length() < 1e-9, "{}: {:?} against {want:?}", before.name, after.com_link_m);
+    }
+}

@@ -130,6 +130,18 @@ impl MultiBody {
         out
     }
 
+    /// The same tree with `first_moment` (kg·m, body frame) added to body `body`'s mass × centre
+    /// of mass, its mass and rotational inertia about its origin left as they are (a centre of
+    /// mass a little off: [`crate::gap::accuracy`]).
+    #[must_use]
+    pub fn with_first_moment_added(&self, body: usize, first_moment: DVec3) -> Self {
+        let mut out = self.clone();
+        if let Some(b) = out.bodies.get_mut(body) {
+            b.inertia.first_moment += first_moment;
+        }
+        out
+    }
+
     /// The bodies, parents first.
     #[must_use]
     pub fn bodies(&self) -> &[Body] {

@@ -903,6 +903,7 @@ mod tests {
             noise_sigma: BTreeMap::new(),
             notes: Vec::new(),
             joints: BTreeMap::new(),
+            com_shift_m: BTreeMap::new(),
             series: Vec::new(),
         }
     }

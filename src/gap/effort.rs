@@ -19,6 +19,7 @@ use std::sync::{Arc, Mutex};
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::accuracy::{bodies_beyond, first_moment_efforts, first_moment_prior};
 use super::effects::{Effect, EffectKind};
 use super::model::{DofKind, GapModel};
 use super::smooth::{GAUSS_HALF_GAIN_F_SIGMA, GAUSS_SUPPORT_SIGMAS, Smoother, local_cubic};
@@ -83,6 +84,16 @@ pub struct SelectionRules {
     /// law, not dry friction (the real double pendulum's elbow, at 6 rad/s RMS, was read as one
     /// over 5.9 rad/s and replayed worse; a damped door tracked by its pose as one over 0.7 rad/s).
     pub max_transition_speed: (f64, f64),
+    /// Prior standard deviation of a chain link's first-moment error (mass × centre of mass),
+    /// as a share of its own first moment or of its mass × [`Self::first_moment_min_lever_m`],
+    /// whichever is larger ([`super::accuracy`]): the accuracy [`Self::min_static_load_share`]
+    /// grants a published model's masses and centres of mass, 5 %. Twice that let the real
+    /// double pendulum's links wander by 3-5 cm and its held-out replay get 2-10× worse. 0 fits
+    /// no such error.
+    pub first_moment_tolerance: f64,
+    /// Least lever of a link's first-moment prior, m: a link whose centre of mass sits on its
+    /// joint's origin is still not known to better than a centimetre or so times its mass.
+    pub first_moment_min_lever_m: f64,
     /// Half-width of the first, wide smoothing pass that measures the motion's frequency, s (the
     /// window used is then chosen from it, [`bandwidth`]).
     pub smoothing_half_width_s: f64,
@@ -113,6 +124,8 @@ impl Default for SelectionRules {
             max_breakaway_ratio: 3.0,
             max_transition_speed: (0.5, 0.1),
             min_replay_gain: 0.25,
+            first_moment_tolerance: 0.05,
+            first_moment_min_lever_m: 0.05,
         }
     }
 }
@@ -369,6 +382,9 @@ struct Column {
     /// positions, no parallel filter): the size of a term is judged there, since the filter
     /// attenuates fast terms (inertia) more than slow ones (gravity) and would bias the shares.
     size: Vec<f64>,
+    /// Precision of its parameter's prior (a ridge on the diagonal of the normal equations): 0
+    /// for a candidate's column, 1 / σ² for the model's own first-moment error ([`super::accuracy`]).
+    precision: f64,
 }
 
 /// Per row and fold: the Gram matrix of the columns touching the row, their products with the
@@ -461,6 +477,10 @@ pub struct JointFinding {
     pub residual_after: Vec<f64>,
     /// Terms considered and not reported, with the reason.
     pub rejected: Vec<String>,
+    /// The model's own first-moment error fitted beside the terms ([`super::accuracy`]), for
+    /// the bodies whose nearest identified joint this is: (tree body, added mass × centre of
+    /// mass in the body's frame, kg·m).
+    pub first_moments: Vec<(usize, DVec3)>,
 }
 
 impl JointFinding {
@@ -532,6 +552,11 @@ pub struct EffortProblem<'a> {
     block_fits: Mutex<HashMap<Vec<usize>, Arc<BlockFit>>>,
     /// Sizes of terms already measured ([`Self::change_rms`]).
     change_sizes: Mutex<HashMap<ChangeKey, f64>>,
+    /// The columns of the model's own first-moment error, in every fit ([`super::accuracy`]).
+    nuisance: Vec<usize>,
+    /// Per nuisance column: its body, the axis of the body's frame, and the row that owns the
+    /// body (its nearest identified joint).
+    nuisance_of: BTreeMap<usize, (usize, usize, usize)>,
 }
 
 /// A term's size, by candidate and its parameters' bits, and the replaced term's, if any.
@@ -723,13 +748,73 @@ impl<'a> EffortProblem<'a> {
             moving: Vec::new(),
             block_fits: Mutex::new(HashMap::new()),
             change_sizes: Mutex::new(HashMap::new()),
+            nuisance: Vec::new(),
+            nuisance_of: BTreeMap::new(),
         };
         problem.fold_of = problem.assign_folds(sig);
         problem.moving = problem.moving_folds(sig);
         problem.build_candidates(sig, &me, &part_of, gravity.normalize_or_zero());
+        let beyond: Vec<Vec<usize>> = effort_joints
+            .iter()
+            .map(|&j| match body_of_link[model.joints[j].child] {
+                Some(b) if in_serial_chain(model, j) => bodies_beyond(&tree, b),
+                _ => Vec::new(),
+            })
+            .collect();
+        problem.add_model_accuracy(&tree, sig, gravity, &beyond);
         problem.weights = problem.rows.iter().map(|r| 1.0 / robust_scale(&r.residual).max(1e-9).powi(2)).collect();
         problem.build_grams();
         Some(problem)
+    }
+
+    /// Adds the model's first-moment error as nuisance columns ([`super::accuracy`]): per body
+    /// carried by a chain joint and per axis of its frame, one column on every chain row that
+    /// carries it, with its prior's precision; every fit includes them ([`Self::columns_of`]).
+    /// `beyond[r]`: the bodies row r's joint carries, none for a joint alone on its body.
+    fn add_model_accuracy(&mut self, tree: &MultiBody, sig: &Signals, gravity: DVec3, beyond: &[Vec<usize>]) {
+        let mut bodies: Vec<usize> = beyond.iter().flatten().copied().collect();
+        bodies.sort_unstable();
+        bodies.dedup();
+        if bodies.is_empty() || self.rules.first_moment_tolerance <= 0.0 {
+            return;
+        }
+        let moments = first_moment_efforts(tree, &sig.raw, gravity, &bodies);
+        // The weighted sums of the normal equations count every sample, but the filtered terms
+        // and efforts are correlated over the filter's width: one independent piece of evidence
+        // per 2√π σ of time (a Gaussian filter's equivalent width). The prior is weighed against
+        // that evidence, not against the sample count, or any data would swamp it.
+        let dt = median(&sig.time_s.windows(2).map(|w| w[1] - w[0]).collect::<Vec<f64>>()).max(1e-9);
+        let samples_per_piece = (2.0 * std::f64::consts::PI.sqrt() * sig.band.sigma_s / dt).max(1.0);
+        // A body's owner: the row that carries it with the fewest bodies (its nearest joint).
+        let owner = |b: usize| (0..beyond.len()).filter(|&r| beyond[r].contains(&b)).min_by_key(|&r| (beyond[r].len(), r));
+        for &b in &bodies {
+            let Some(owner) = owner(b) else { continue };
+            let sd = first_moment_prior(tree, b, self.rules.first_moment_tolerance, self.rules.first_moment_min_lever_m);
+            if sd <= 0.0 {
+                continue;
+            }
+            for (a, axis) in moments[&b].iter().enumerate() {
+                let mut rows = BTreeMap::new();
+                for (r, info) in self.rows.iter().enumerate().filter(|(r, _)| beyond[*r].contains(&b)) {
+                    let used = &self.used[r];
+                    let values: Vec<f64> = sig
+                        .filter
+                        .apply(&axis[info.dof])
+                        .into_iter()
+                        .enumerate()
+                        .map(|(i, v)| if used[i] { v } else { f64::NAN })
+                        .collect();
+                    if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
+                        rows.insert(r, values);
+                    }
+                }
+                if !rows.is_empty() {
+                    self.columns.push(Column { rows, size: Vec::new(), precision: samples_per_piece / (sd * sd) });
+                    self.nuisance.push(self.columns.len() - 1);
+                    self.nuisance_of.insert(self.columns.len() - 1, (b, a, owner));
+                }
+            }
+        }
     }
 
     /// The identified joints, with their residual effort under the model as written.
@@ -872,7 +957,7 @@ struct CandidateSink {
 
 impl CandidateSink {
     fn push_column(&mut self, row: usize, (values, size): (Vec<f64>, Vec<f64>)) -> usize {
-        self.columns.push(Column { rows: BTreeMap::from([(row, values)]), size });
+        self.columns.push(Column { rows: BTreeMap::from([(row, values)]), size, precision: 0.0 });
         self.columns.len() - 1
     }
 
@@ -1040,7 +1125,7 @@ impl EffortProblem<'_> {
         let d = self.rows[r].dof;
         let size =
             (0..n).map(|i| if self.used[r][i] { part_of[r].iter().map(|b| me.size.body_tau[b][d][i]).sum() } else { f64::NAN }).collect();
-        sink.columns.push(Column { rows, size });
+        sink.columns.push(Column { rows, size, precision: 0.0 });
         Some(Candidate {
             row: r,
             kind: EffectKind::MassScale,
@@ -1115,8 +1200,10 @@ impl Evaluation {
 }
 
 impl EffortProblem<'_> {
+    /// The columns of the candidates `set` and the model's own error's, sorted.
     fn columns_of(&self, set: &[usize]) -> Vec<usize> {
-        let mut cols: Vec<usize> = set.iter().flat_map(|&c| self.candidates[c].columns.iter().copied()).collect();
+        let mut cols: Vec<usize> =
+            set.iter().flat_map(|&c| self.candidates[c].columns.iter().copied()).chain(self.nuisance.iter().copied()).collect();
         cols.sort_unstable();
         cols.dedup();
         cols
@@ -1188,9 +1275,10 @@ impl EffortProblem<'_> {
                 }
             }
         }
-        // A whisper of ridge keeps exactly collinear columns (look-alike kinds) solvable.
-        for i in 0..p {
-            a[i * p + i] += 1e-9 * a[i * p + i] + 1e-300;
+        // A whisper of ridge keeps exactly collinear columns (look-alike kinds) solvable; the
+        // model's own error has its prior.
+        for (i, &c) in cols.iter().enumerate() {
+            a[i * p + i] += 1e-9 * a[i * p + i] + 1e-300 + self.columns[c].precision;
         }
         solve_spd(&a, &b, p).unwrap_or_else(|| vec![0.0; p])
     }
@@ -2005,7 +2093,6 @@ impl EffortProblem<'_> {
     pub fn findings(&self, terms: &Terms) -> Vec<JointFinding> {
         let chosen = terms.0.clone();
         let k = self.rules.folds.max(2);
-        let nominal = self.evaluate(&[]);
         let fitted = self.evaluate(&chosen);
         let mut findings: Vec<JointFinding> = self
             .rows
@@ -2020,7 +2107,8 @@ impl EffortProblem<'_> {
                     param_std: Vec::new(),
                     confidence: Vec::new(),
                     effect_rms: Vec::new(),
-                    cv_rms_before: to_rms(nominal.row_sse(r)),
+                    // The model as written: its own first-moment error not fitted either.
+                    cv_rms_before: to_rms(self.grams[r].folds.iter().map(|f| f.2.max(0.0)).sum()),
                     cv_rms_after: to_rms(fitted.row_sse(r)),
                     effort_rms: info.effort_rms,
                     gravity_rms: info.gravity_rms,
@@ -2028,6 +2116,7 @@ impl EffortProblem<'_> {
                     residual_before: info.residual.clone(),
                     residual_after: self.residual_after(r, &chosen, &fitted.theta),
                     rejected: Vec::new(),
+                    first_moments: self.first_moments_of(r, &fitted.theta),
                 }
             })
             .collect();
@@ -2047,6 +2136,17 @@ impl EffortProblem<'_> {
         }
         self.explain_rejections(&chosen, &fitted, &mut findings);
         findings
+    }
+
+    /// The first-moment changes `theta` fits for the bodies row r owns, by body.
+    fn first_moments_of(&self, r: usize, theta: &BTreeMap<usize, f64>) -> Vec<(usize, DVec3)> {
+        let mut out: BTreeMap<usize, DVec3> = BTreeMap::new();
+        for (c, &(b, axis, owner)) in &self.nuisance_of {
+            if owner == r {
+                out.entry(b).or_default()[axis] += theta.get(c).copied().unwrap_or(0.0);
+            }
+        }
+        out.into_iter().collect()
     }
 
     fn residual_after(&self, r: usize, chosen: &[usize], theta: &BTreeMap<usize, f64>) -> Vec<f64> {
@@ -2272,6 +2372,7 @@ mod tests {
             residual_before: residual.to_vec(),
             residual_after: residual.to_vec(),
             rejected: Vec::new(),
+            first_moments: Vec::new(),
         };
         let got = finding.with_friction_at_rest(speed);
         assert_eq!(got.residual_after, expected);
@@ -2322,10 +2423,17 @@ mod tests {
         check_slides(&pull, (0.05, 0.2), false);
     }
 
+    const TWO_LINK_ARM: &str = r#"<robot name="arm"><link name="base"/>
+          <link name="upper"><inertial><origin xyz="0 0 -0.15"/><mass value="1.2"/><inertia ixx="0.01" iyy="0.01" izz="0.002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+          <link name="fore"><inertial><origin xyz="0 0 -0.12"/><mass value="0.7"/><inertia ixx="0.005" iyy="0.005" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+          <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
+          <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="0 0 -0.3"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
+        </robot>"#;
+
     /// The effort problem of a two-link arm swinging in a vertical plane (10 s at 200 Hz),
-    /// its efforts those of the model with friction on both joints.
-    fn two_link_problem(model: &GapModel) -> EffortProblem<'_> {
-        let (tree, _) = model.multibody().expect("tree");
+    /// analysed with `model`, its efforts those of the tree `truth` with Coulomb friction 0.3 on
+    /// both joints.
+    fn two_link_problem<'m>(model: &'m GapModel, truth: &MultiBody, rules: SelectionRules) -> EffortProblem<'m> {
         let time_s: Vec<f64> = (0..2000).map(|i| f64::from(i) / 200.0).collect();
         let q: Vec<Vec<f64>> = [(0.7, 1.3), (0.5, 2.1)]
             .iter()
@@ -2339,7 +2447,7 @@ mod tests {
                     (0..time_s.len())
                         .map(|i| {
                             let at = |k: usize| motion.iter().map(|m| m[i][k]).collect::<Vec<f64>>();
-                            let tau = tree.inverse_dynamics(&at(0), &at(1), &at(2), gravity)[d];
+                            let tau = truth.inverse_dynamics(&at(0), &at(1), &at(2), gravity)[d];
                             tau + 0.3 * (at(1)[d] / 0.01).tanh()
                         })
                         .collect(),
@@ -2350,19 +2458,20 @@ mod tests {
         let sig = signals(&time_s, &q, &efforts, &band);
         let rows: Vec<usize> = model.dofs();
         let excluded = vec![vec![false; time_s.len()]; rows.len()];
-        EffortProblem::new(model, &sig, gravity, &rows, &excluded, &vec![true; time_s.len()], SelectionRules::default()).expect("problem")
+        EffortProblem::new(model, &sig, gravity, &rows, &excluded, &vec![true; time_s.len()], rules).expect("problem")
+    }
+
+    fn two_link_model() -> GapModel {
+        super::super::model::parse_model(TWO_LINK_ARM, std::path::Path::new("arm.urdf")).expect("model")
     }
 
     #[test]
     fn blocks_solved_apart_give_the_joint_solve_and_a_heavier_part_couples_its_joints() {
-        let urdf = r#"<robot name="arm"><link name="base"/>
-          <link name="upper"><inertial><origin xyz="0 0 -0.15"/><mass value="1.2"/><inertia ixx="0.01" iyy="0.01" izz="0.002" ixy="0" ixz="0" iyz="0"/></inertial></link>
-          <link name="fore"><inertial><origin xyz="0 0 -0.12"/><mass value="0.7"/><inertia ixx="0.005" iyy="0.005" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
-          <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
-          <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="0 0 -0.3"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="5"/></joint>
-        </robot>"#;
-        let model = super::super::model::parse_model(urdf, std::path::Path::new("arm.urdf")).expect("model");
-        let problem = two_link_problem(&model);
+        let model = two_link_model();
+        let (tree, _) = model.multibody().expect("tree");
+        // Without the model's own first-moment error, which couples every joint of a chain.
+        let rules = SelectionRules { first_moment_tolerance: 0.0, ..SelectionRules::default() };
+        let problem = two_link_problem(&model, &tree, rules);
         let first_of = |row: usize, kind: EffectKind| {
             (0..problem.candidates.len())
                 .find(|&c| problem.candidates[c].row == row && problem.candidates[c].kind == kind)
@@ -2396,5 +2505,41 @@ mod tests {
         let fit = problem.evaluate(&[first_of(0, EffectKind::CoulombFriction), first_of(1, EffectKind::CoulombFriction)]);
         let level = problem.effect_of(first_of(0, EffectKind::CoulombFriction), &fit.theta).params[0];
         assert!((level - 0.3).abs() < 0.03, "shoulder friction {level}");
+        // With it, the forearm's first moment loads both joints: one block for any terms.
+        let with_accuracy = two_link_problem(&model, &tree, SelectionRules::default());
+        assert_eq!(with_accuracy.nuisance.len(), 4, "two axes of each link: along the joints' axis gravity does nothing");
+        assert_eq!(with_accuracy.blocks_of(&with_accuracy.columns_of(&apart)).len(), 1);
+    }
+
+    /// A model whose forearm's centre of mass is 6 mm off the arm's (3 mm aside and 5 mm lower,
+    /// within the 5 % of its first moment the model is trusted to): its gravity error is fitted
+    /// as the model's accuracy, the friction comes out as put in, nothing of the error's shape is
+    /// named, and the fitted first moment points the way the true one does, pulled towards the
+    /// model by its prior (here to about a third: the efforts' residual scale weighs the data,
+    /// one piece per filter width).
+    #[test]
+    fn a_centre_of_mass_off_is_the_models_accuracy_not_an_offset_or_a_spring() {
+        let model = two_link_model();
+        let (tree, _) = model.multibody().expect("tree");
+        let fore = tree.bodies().iter().position(|b| b.name == "fore").expect("forearm");
+        let true_shift = DVec3::new(0.003, 0.0, -0.005);
+        let truth = tree.with_first_moment_added(fore, 0.7 * true_shift);
+        let problem = two_link_problem(&model, &truth, SelectionRules::default());
+        let terms = problem.chosen_terms();
+        let findings = problem.findings(&terms);
+        for f in &findings {
+            let kinds: Vec<EffectKind> = f.effects.iter().map(|e| e.kind).collect();
+            assert_eq!(kinds, vec![EffectKind::CoulombFriction], "joint {}: {:?}", f.joint, f.effects);
+            assert!((f.effects[0].params[0] - 0.3).abs() < 0.03, "joint {}: {:?}", f.joint, f.effects[0]);
+        }
+        // The forearm belongs to the elbow. Along the joints' axis (y) gravity says nothing.
+        let fitted: Vec<(usize, DVec3)> = findings.iter().flat_map(|f| f.first_moments.iter().copied()).collect();
+        let (_, h) = fitted.iter().find(|(b, _)| *b == fore).expect("the forearm's first moment");
+        let got = *h / 0.7;
+        let cosine = got.dot(true_shift) / (got.length() * true_shift.length()).max(1e-12);
+        assert!(
+            cosine > 0.9 && got.length() > 0.2 * true_shift.length() && got.length() < true_shift.length(),
+            "{got:?} against {true_shift:?}"
+        );
     }
 }

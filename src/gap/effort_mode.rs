@@ -115,6 +115,7 @@ fn fitted_physics(
     tree: &MultiBody,
     body_of_link: &[Option<usize>],
     effects: &BTreeMap<usize, Vec<Effect>>,
+    first_moments: &[(usize, DVec3)],
 ) -> (Vec<JointPhysics>, MultiBody) {
     let mut scaled = tree.clone();
     let physics = model
@@ -136,7 +137,16 @@ fn fitted_physics(
             p
         })
         .collect();
+    // The model's own first-moment error, fitted beside the effects, after any heavier part.
+    for &(body, h) in first_moments {
+        scaled = scaled.with_first_moment_added(body, h);
+    }
     (physics, scaled)
+}
+
+/// The first-moment changes of all `findings` ([`JointFinding::first_moments`]).
+fn first_moments_of(findings: &[JointFinding]) -> Vec<(usize, DVec3)> {
+    findings.iter().flat_map(|f| f.first_moments.iter().copied()).collect()
 }
 
 /// Unmodelled stops of every identified joint (same order as `rows_info`).
@@ -329,7 +339,8 @@ impl HeldOutReplay<'_> {
     /// The chain under `findings` replayed through the held-out part (samples from `t_split`
     /// on) in pieces of `horizon_s`, each from the measured state.
     fn replay(&self, findings: &[JointFinding], sig: &Signals, horizon_s: f64) -> Vec<Vec<f64>> {
-        let (physics, fitted) = fitted_physics(self.model, self.tree, self.body_of_link, &effects_by_joint(findings));
+        let (physics, fitted) =
+            fitted_physics(self.model, self.tree, self.body_of_link, &effects_by_joint(findings), &first_moments_of(findings));
         replay_pieces(&fitted, &physics, self.input, sig, self.t_split, horizon_s)
     }
 
@@ -647,7 +658,7 @@ pub(super) fn analyze_effort_space(
     rows: &[usize],
     gravity: DVec3,
     t_split: f64,
-) -> Result<(Vec<JointOutcome>, BTreeMap<usize, Given>), GapError> {
+) -> Result<EffortOutcome, GapError> {
     let rules = SelectionRules::default();
     let dofs = model.dofs();
     let n = rec.time_s.len();
@@ -667,7 +678,7 @@ pub(super) fn analyze_effort_space(
         }
     }
     let Some(mut found) = best else {
-        return Ok((Vec::new(), BTreeMap::new()));
+        return Ok(EffortOutcome::default());
     };
 
     let (tree, body_of_link) = model.multibody()?;
@@ -677,7 +688,7 @@ pub(super) fn analyze_effort_space(
     // pieces from the measured state ([`Bandwidth::held_out_horizon_s`]).
     let start = replay_start(&found.sig, rec.time_s.first().copied().unwrap_or(0.0));
     let horizon_s = found.band.held_out_horizon_s();
-    let (nominal_physics, _) = fitted_physics(model, &tree, &body_of_link, &BTreeMap::new());
+    let (nominal_physics, _) = fitted_physics(model, &tree, &body_of_link, &BTreeMap::new(), &[]);
     let held_before = replay_pieces(&tree, &nominal_physics, &input, &found.sig, t_split, horizon_s);
     let replay = HeldOutReplay {
         model,
@@ -696,7 +707,8 @@ pub(super) fn analyze_effort_space(
     let findings = found.findings_with_overruled();
     let Identified { band, sig, rows, train_findings, .. } = found;
     let rows = rows.as_slice();
-    let (physics, tree_fitted) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(&findings));
+    let first_moments = first_moments_of(&findings);
+    let (physics, tree_fitted) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(&findings), &first_moments);
     let (before, after) = rayon::join(
         || replay_from(&tree, &nominal_physics, &input, &sig, start),
         || replay_from(&tree_fitted, &physics, &input, &sig, start),
@@ -737,7 +749,30 @@ pub(super) fn analyze_effort_space(
             );
         }
     }
-    Ok((out, given))
+    Ok(EffortOutcome { joints: out, given, com_shift_m: com_shifts(&tree, &first_moments) })
+}
+
+/// What effort space gives the rest of the analysis.
+#[derive(Default)]
+pub(super) struct EffortOutcome {
+    /// The chain joints' outcomes.
+    pub joints: Vec<JointOutcome>,
+    /// Per joint alone on its body: the terms for output error to refine.
+    pub given: BTreeMap<usize, Given>,
+    /// Per link: its centre of mass moved by the model's own first-moment error fitted beside
+    /// the effects (m, link frame; [`super::report::GapReport::com_shift_m`]).
+    pub com_shift_m: BTreeMap<String, [f64; 3]>,
+}
+
+/// First-moment changes as centre-of-mass shifts by link name (a massless body has none).
+fn com_shifts(tree: &MultiBody, first_moments: &[(usize, DVec3)]) -> BTreeMap<String, [f64; 3]> {
+    first_moments
+        .iter()
+        .filter_map(|&(b, h)| {
+            let body = tree.bodies().get(b)?;
+            (body.inertia.mass_kg > 0.0).then(|| (body.name.clone(), (h / body.inertia.mass_kg).to_array()))
+        })
+        .collect()
 }
 
 /// Whether `f` leaves effort unexplained beyond the joint's own effort and beyond what the

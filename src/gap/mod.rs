@@ -8,6 +8,7 @@
 //! fitted model, `plot` the SVG figures, `generate` recordings with concealed effects (different
 //! physics code: RK4 with event location) for tests and demos.
 
+pub mod accuracy;
 pub mod bench;
 pub mod chain;
 pub mod effects;
@@ -116,11 +117,21 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     let t_split = rec.time_s[0] + (1.0 - cfg.held_out_fraction) * (rec.time_s[n - 1] - rec.time_s[0]);
     let held_still = model.with_welded(&unobserved_leaves);
     let effort_joints = effort_space_joints(&held_still, rec, &observed);
-    let (mut outcomes, given) = if effort_joints.is_empty() {
-        (Vec::new(), std::collections::BTreeMap::new())
+    let effort_mode::EffortOutcome { joints: mut outcomes, given, com_shift_m } = if effort_joints.is_empty() {
+        effort_mode::EffortOutcome::default()
     } else {
         analyze_effort_space(&held_still, rec, cfg, &observed, &effort_joints, gravity, t_split)?
     };
+    if !com_shift_m.is_empty() {
+        let moved: Vec<String> =
+            com_shift_m.iter().map(|(link, d)| format!("{link} {:.1} mm", 1e3 * DVec3::from_array(*d).length())).collect();
+        notes.push(format!(
+            "the model's centres of mass were fitted beside the effects as its own accuracy (first moments within {:.0} % of \
+             each link's, not reported as effects; written into the fitted URDF): {}",
+            100.0 * effort::SelectionRules::default().first_moment_tolerance,
+            moved.join(", ")
+        ));
+    }
     let done: Vec<usize> = outcomes.iter().filter_map(|o| model.joint_index(&o.series.joint)).collect();
     let filled: Vec<Vec<f64>> =
         (0..model.joints.len()).map(|j| observed.get(&j).map_or_else(|| vec![0.0; n], |q| observe::fill_gaps(q))).collect();
@@ -150,7 +161,9 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
             .collect::<Vec<_>>(),
     );
     outcomes.sort_by_key(|o| model.joint_index(&o.series.joint));
-    Ok(assemble_report(cfg, notes, t_split, outcomes))
+    let mut report = assemble_report(cfg, notes, t_split, outcomes);
+    report.com_shift_m = com_shift_m;
+    Ok(report)
 }
 
 fn assemble_report(cfg: &GapConfig, notes: Vec<String>, t_split: f64, outcomes: Vec<JointOutcome>) -> GapReport {
@@ -164,6 +177,7 @@ fn assemble_report(cfg: &GapConfig, notes: Vec<String>, t_split: f64, outcomes: 
         noise_sigma: std::collections::BTreeMap::default(),
         notes,
         joints: std::collections::BTreeMap::default(),
+        com_shift_m: std::collections::BTreeMap::default(),
         series: Vec::new(),
     };
     let (mut sb, mut sa, mut count) = (0.0, 0.0, 0usize);
@@ -1114,7 +1128,7 @@ pub fn write_outputs(dir: &Path, model: &GapModel, report: &GapReport) -> Result
     };
     let json = serde_json::to_string_pretty(report).unwrap_or_default();
     put("report.json", json.as_bytes())?;
-    put(&report.fitted_model, report::fitted_urdf(model, &report.effects)?.as_bytes())?;
+    put(&report.fitted_model, report::fitted_urdf(model, &report.effects, &report.com_shift_m)?.as_bytes())?;
     let model_name = model.file.file_name().map_or_else(String::new, |f| f.to_string_lossy().into_owned());
     put("model.fitted.json", report::sidecar_json(report, &model_name).as_bytes())?;
     for s in &report.series {

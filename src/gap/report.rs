@@ -177,14 +177,25 @@ pub struct GapReport {
     pub notes: Vec<String>,
     /// Per joint: the way in (effort or position space) and what was rejected.
     pub joints: BTreeMap<String, JointAnalysis>,
+    /// Per link: how far effort space moved its centre of mass (m, link frame) as the model's own
+    /// accuracy, fitted beside the effects and not an effect itself (`gap::accuracy`); written
+    /// into the fitted URDF's `<inertial><origin>`. Empty (and absent) without a chain in effort
+    /// space.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub com_shift_m: BTreeMap<String, [f64; 3]>,
     /// Plot series, one per analysed joint.
     #[serde(skip)]
     pub series: Vec<JointSeries>,
 }
 
 /// The fitted URDF: the model's text with `<dynamics damping friction>` raised by the found
-/// viscous damping and Coulomb friction, and `<limit>` narrowed by found end stops.
-pub fn fitted_urdf(model: &GapModel, effects: &[EffectReport]) -> Result<String, super::error::GapError> {
+/// viscous damping and Coulomb friction, `<limit>` narrowed by found end stops, and centres of
+/// mass moved by `com_shift_m` (link name → shift in the link frame, m).
+pub fn fitted_urdf(
+    model: &GapModel,
+    effects: &[EffectReport],
+    com_shift_m: &BTreeMap<String, [f64; 3]>,
+) -> Result<String, super::error::GapError> {
     let mut robot = model.robot.clone();
     // Links massed from their primitives get that mass written out: a URDF writer emits an
     // `<inertial>` for every link, and one of mass 0 would read back as a massless link.
@@ -203,6 +214,14 @@ pub fn fitted_urdf(model: &GapModel, effects: &[EffectReport]) -> Result<String,
                     izz: i.z_axis.z,
                 },
             };
+        }
+    }
+    for link in &mut robot.links {
+        if let Some(shift) = com_shift_m.get(&link.name) {
+            // The inertial frame's origin is the centre of mass, in the link frame.
+            for (x, d) in link.inertial.origin.xyz.0.iter_mut().zip(shift) {
+                *x += d;
+            }
         }
     }
     for joint in &mut robot.joints {
