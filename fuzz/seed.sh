@@ -99,6 +99,16 @@ with_labels() {
 }
 
 echo "seeding $corpus from generated files and $shared/data"
+# The shared data may be absent (a clone on its own): then only generated files seed, said once.
+shared_dirs=()
+for d in "$shared/data/recordings" "$shared/data/objects"; do
+  if [ -d "$d" ]; then shared_dirs+=("$d"); fi
+done
+if [ "${#shared_dirs[@]}" -eq 0 ]; then
+  echo "seed: $shared/data is absent: seeding from generated files only" >&2
+fi
+recordings_dir=()
+if [ -d "$shared/data/recordings" ]; then recordings_dir=("$shared/data/recordings"); fi
 "$bin" demo --seed 0 --out "$work/demo0" >"$work/demo0.log" 2>&1
 "$bin" demo --seed 3 --clean --out "$work/demo3" >"$work/demo3.log" 2>&1
 
@@ -137,7 +147,7 @@ done
 
 # Recordings: gap::generate on the small reconstructions' URDFs and the shared recordings' models
 # (through the ignored test that writes them), and the first rows of the shared recordings.
-urdfs="$(find "$work/rec" "$shared/data/recordings" -name '*.urdf' 2>/dev/null | sort | head -n 6 | paste -sd: -)"
+urdfs="$(find "$work/rec" "${recordings_dir[@]}" -name '*.urdf' | sort | head -n 6 | paste -sd: -)"
 PARTSCENE_FUZZ_SEED_URDFS="$urdfs" PARTSCENE_FUZZ_SEED_OUT="$work/gap" \
   cargo test --locked --quiet --test fuzz_regressions -- --ignored --exact write_generated_gap_seeds >/dev/null
 add gap_recording "$work"/gap/*.csv
@@ -147,14 +157,14 @@ for csv in "$shared"/data/recordings/*/recording*.csv; do
 done
 add gap_recording "$work"/gap/head-*.csv
 
-mapfile -t urdf_files < <(find "$work" "$shared/data/recordings" "$shared/data/objects" -name '*.urdf' 2>/dev/null | sort)
+mapfile -t urdf_files < <(find "$work" "${shared_dirs[@]}" -name '*.urdf' | sort)
 add gap_model "${urdf_files[@]}"
 add asset_urdf "${urdf_files[@]}"
-mapfile -t mjcf_files < <({ find "$work" -name '*.mjcf.xml'; find "$shared/data/objects" -name '*.xml'; } 2>/dev/null | sort)
+mapfile -t mjcf_files < <({ find "$work" -name '*.mjcf.xml'; [ ! -d "$shared/data/objects" ] || find "$shared/data/objects" -name '*.xml'; } | sort)
 add asset_mjcf "${mjcf_files[@]}"
 
 for ext in obj stl glb msh; do
-  mapfile -t meshes < <(find "$work" "$shared/data/objects" -iname "*.$ext" 2>/dev/null | sort)
+  mapfile -t meshes < <(find "$work" "${shared_dirs[@]}" -iname "*.$ext" | sort)
   add "mesh_$ext" "${meshes[@]}"
 done
 

@@ -182,6 +182,15 @@ pub fn gap_ui(ui: &mut egui::Ui, gap: &mut GapState, commands: &mut Vec<AppComma
         ui.label(format!("found on {}: {} ({}), confidence {:.2}", e.joint, e.kind, params.join(", "), e.confidence))
             .on_hover_text(&e.description);
     }
+    for (link, d) in &r.com_shift_m {
+        ui.weak(format!(
+            "{link}: centre of mass moved by ({:.1}, {:.1}, {:.1}) mm, the model's own accuracy (fitted beside the effects, not one)",
+            1e3 * d[0],
+            1e3 * d[1],
+            1e3 * d[2]
+        ))
+        .on_hover_text("written into the fitted URDF's <inertial><origin>; a first-moment error within the few percent a model's weights are trusted to");
+    }
     considered_ui(ui, r);
     if r.series.is_empty() {
         return;

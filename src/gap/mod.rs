@@ -122,16 +122,7 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     } else {
         analyze_effort_space(&held_still, rec, cfg, &observed, &effort_joints, gravity, t_split)?
     };
-    if !com_shift_m.is_empty() {
-        let moved: Vec<String> =
-            com_shift_m.iter().map(|(link, d)| format!("{link} {:.1} mm", 1e3 * DVec3::from_array(*d).length())).collect();
-        notes.push(format!(
-            "the model's centres of mass were fitted beside the effects as its own accuracy (first moments within {:.0} % of \
-             each link's, not reported as effects; written into the fitted URDF): {}",
-            100.0 * effort::SelectionRules::default().first_moment_tolerance,
-            moved.join(", ")
-        ));
-    }
+    notes.extend(accuracy_note(&com_shift_m));
     let done: Vec<usize> = outcomes.iter().filter_map(|o| model.joint_index(&o.series.joint)).collect();
     let filled: Vec<Vec<f64>> =
         (0..model.joints.len()).map(|j| observed.get(&j).map_or_else(|| vec![0.0; n], |q| observe::fill_gaps(q))).collect();
@@ -164,6 +155,21 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     let mut report = assemble_report(cfg, notes, t_split, outcomes);
     report.com_shift_m = com_shift_m;
     Ok(report)
+}
+
+/// The note that says how far effort space moved each link's centre of mass as the model's own
+/// accuracy ([`accuracy`]); none when it moved none.
+fn accuracy_note(com_shift_m: &std::collections::BTreeMap<String, [f64; 3]>) -> Option<String> {
+    (!com_shift_m.is_empty()).then(|| {
+        let moved: Vec<String> =
+            com_shift_m.iter().map(|(link, d)| format!("{link} {:.1} mm", 1e3 * DVec3::from_array(*d).length())).collect();
+        format!(
+            "the model's centres of mass were fitted beside the effects as its own accuracy (first moments within {:.0} % of \
+             each link's, not reported as effects; written into the fitted URDF): {}",
+            100.0 * effort::SelectionRules::default().first_moment_tolerance,
+            moved.join(", ")
+        )
+    })
 }
 
 fn assemble_report(cfg: &GapConfig, notes: Vec<String>, t_split: f64, outcomes: Vec<JointOutcome>) -> GapReport {
