@@ -132,7 +132,7 @@ impl MultiBody {
 
     /// The same tree with `first_moment` (kg·m, body frame) added to body `body`'s mass × centre
     /// of mass, its mass and rotational inertia about its origin left as they are (a centre of
-    /// mass a little off: [`crate::gap::accuracy`]).
+    /// mass a little off).
     #[must_use]
     pub fn with_first_moment_added(&self, body: usize, first_moment: DVec3) -> Self {
         let mut out = self.clone();

@@ -552,11 +552,10 @@ pub struct EffortProblem<'a> {
     block_fits: Mutex<HashMap<Vec<usize>, Arc<BlockFit>>>,
     /// Sizes of terms already measured ([`Self::change_rms`]).
     change_sizes: Mutex<HashMap<ChangeKey, f64>>,
-    /// The columns of the model's own first-moment error, in every fit ([`super::accuracy`]).
-    nuisance: Vec<usize>,
-    /// Per nuisance column: its body, the axis of the body's frame, and the row that owns the
-    /// body (its nearest identified joint).
-    nuisance_of: BTreeMap<usize, (usize, usize, usize)>,
+    /// The columns of the model's own first-moment error, in every fit ([`super::accuracy`]),
+    /// each with its body, the axis of the body's frame, and the row that owns the body (its
+    /// nearest identified joint).
+    nuisance: BTreeMap<usize, (usize, usize, usize)>,
 }
 
 /// A term's size, by candidate and its parameters' bits, and the replaced term's, if any.
@@ -748,8 +747,7 @@ impl<'a> EffortProblem<'a> {
             moving: Vec::new(),
             block_fits: Mutex::new(HashMap::new()),
             change_sizes: Mutex::new(HashMap::new()),
-            nuisance: Vec::new(),
-            nuisance_of: BTreeMap::new(),
+            nuisance: BTreeMap::new(),
         };
         problem.fold_of = problem.assign_folds(sig);
         problem.moving = problem.moving_folds(sig);
@@ -810,8 +808,7 @@ impl<'a> EffortProblem<'a> {
                 }
                 if !rows.is_empty() {
                     self.columns.push(Column { rows, size: Vec::new(), precision: samples_per_piece / (sd * sd) });
-                    self.nuisance.push(self.columns.len() - 1);
-                    self.nuisance_of.insert(self.columns.len() - 1, (b, a, owner));
+                    self.nuisance.insert(self.columns.len() - 1, (b, a, owner));
                 }
             }
         }
@@ -1203,7 +1200,7 @@ impl EffortProblem<'_> {
     /// The columns of the candidates `set` and the model's own error's, sorted.
     fn columns_of(&self, set: &[usize]) -> Vec<usize> {
         let mut cols: Vec<usize> =
-            set.iter().flat_map(|&c| self.candidates[c].columns.iter().copied()).chain(self.nuisance.iter().copied()).collect();
+            set.iter().flat_map(|&c| self.candidates[c].columns.iter().copied()).chain(self.nuisance.keys().copied()).collect();
         cols.sort_unstable();
         cols.dedup();
         cols
@@ -2141,7 +2138,7 @@ impl EffortProblem<'_> {
     /// The first-moment changes `theta` fits for the bodies row r owns, by body.
     fn first_moments_of(&self, r: usize, theta: &BTreeMap<usize, f64>) -> Vec<(usize, DVec3)> {
         let mut out: BTreeMap<usize, DVec3> = BTreeMap::new();
-        for (c, &(b, axis, owner)) in &self.nuisance_of {
+        for (c, &(b, axis, owner)) in &self.nuisance {
             if owner == r {
                 out.entry(b).or_default()[axis] += theta.get(c).copied().unwrap_or(0.0);
             }
