@@ -99,16 +99,15 @@ with_labels() {
 }
 
 echo "seeding $corpus from generated files and $shared/data"
-# The shared data may be absent (a clone on its own): then only generated files seed, said once.
-shared_dirs=()
-for d in "$shared/data/recordings" "$shared/data/objects"; do
-  if [ -d "$d" ]; then shared_dirs+=("$d"); fi
-done
-if [ "${#shared_dirs[@]}" -eq 0 ]; then
+# The shared folders searched, each only where present (a clone on its own has none: then only
+# generated files seed, said once); `find` on a missing folder would fail its pipeline.
+recordings_dir=()
+objects_dir=()
+if [ -d "$shared/data/recordings" ]; then recordings_dir=("$shared/data/recordings"); fi
+if [ -d "$shared/data/objects" ]; then objects_dir=("$shared/data/objects"); fi
+if [ "${#recordings_dir[@]}" -eq 0 ] && [ "${#objects_dir[@]}" -eq 0 ]; then
   echo "seed: $shared/data is absent: seeding from generated files only" >&2
 fi
-recordings_dir=()
-if [ -d "$shared/data/recordings" ]; then recordings_dir=("$shared/data/recordings"); fi
 "$bin" demo --seed 0 --out "$work/demo0" >"$work/demo0.log" 2>&1
 "$bin" demo --seed 3 --clean --out "$work/demo3" >"$work/demo3.log" 2>&1
 
@@ -157,14 +156,14 @@ for csv in "$shared"/data/recordings/*/recording*.csv; do
 done
 add gap_recording "$work"/gap/head-*.csv
 
-mapfile -t urdf_files < <(find "$work" "${shared_dirs[@]}" -name '*.urdf' | sort)
+mapfile -t urdf_files < <(find "$work" "${recordings_dir[@]}" "${objects_dir[@]}" -name '*.urdf' | sort)
 add gap_model "${urdf_files[@]}"
 add asset_urdf "${urdf_files[@]}"
-mapfile -t mjcf_files < <({ find "$work" -name '*.mjcf.xml'; [ ! -d "$shared/data/objects" ] || find "$shared/data/objects" -name '*.xml'; } | sort)
+mapfile -t mjcf_files < <({ find "$work" -name '*.mjcf.xml'; [ "${#objects_dir[@]}" -eq 0 ] || find "${objects_dir[@]}" -name '*.xml'; } | sort)
 add asset_mjcf "${mjcf_files[@]}"
 
 for ext in obj stl glb msh; do
-  mapfile -t meshes < <(find "$work" "${shared_dirs[@]}" -iname "*.$ext" | sort)
+  mapfile -t meshes < <(find "$work" "${objects_dir[@]}" -iname "*.$ext" | sort)
   add "mesh_$ext" "${meshes[@]}"
 done
 
