@@ -1154,22 +1154,27 @@ mod tests {
         assert_eq!(req.unmet(&s), ["kinds exact 0.0 % < required 50.0 %", "1 cases failed"]);
     }
 
-    /// The truth effects left after dropping the stops a joint measured over `measured` never
-    /// reaches, and what was dropped.
-    fn check_reached(truth: &str, measured: &[f64], kept: &[&str], dropped: usize) {
-        let truth = parse_truth(truth, Path::new("truth.json")).unwrap();
-        let mut report = report(&NO_INPUT);
-        report.series.push(super::super::report::JointSeries {
-            joint: "slide".into(),
-            unit: "m",
-            time_s: (0..measured.len()).map(|i| i as f64).collect(),
-            measured: measured.to_vec(),
+    /// A report series holding only a joint's measured positions.
+    fn measured_series(joint: &str, unit: &'static str, time_s: Vec<f64>, measured: Vec<f64>) -> super::super::report::JointSeries {
+        super::super::report::JointSeries {
+            joint: joint.into(),
+            unit,
+            time_s,
+            measured,
             simulated_before: Vec::new(),
             simulated_after: Vec::new(),
             residual_before: Vec::new(),
             residual_after: Vec::new(),
             noise_sigma: 0.0,
-        });
+        }
+    }
+
+    /// The truth effects left after dropping the stops a joint measured over `measured` never
+    /// reaches, and what was dropped.
+    fn check_reached(truth: &str, measured: &[f64], kept: &[&str], dropped: usize) {
+        let truth = parse_truth(truth, Path::new("truth.json")).unwrap();
+        let mut report = report(&NO_INPUT);
+        report.series.push(measured_series("slide", "m", (0..measured.len()).map(|i| i as f64).collect(), measured.to_vec()));
         let (left, why) = unreached_stops(&truth, &report);
         assert_eq!(left.labels(), kept);
         assert_eq!(why.len(), dropped, "{why:?}");
@@ -1202,17 +1207,8 @@ mod tests {
         let mut report = report(&NO_INPUT);
         let time_s: Vec<f64> = (0..800).map(|i| f64::from(i) / 200.0).collect();
         let omega = 2.0 * std::f64::consts::PI * 0.5;
-        report.series.push(super::super::report::JointSeries {
-            joint: "j7".into(),
-            unit: "rad",
-            measured: time_s.iter().map(|t| fastest / omega * (omega * t).sin()).collect(),
-            time_s,
-            simulated_before: Vec::new(),
-            simulated_after: Vec::new(),
-            residual_before: Vec::new(),
-            residual_after: Vec::new(),
-            noise_sigma: 0.0,
-        });
+        let measured = time_s.iter().map(|t| fastest / omega * (omega * t).sin()).collect();
+        report.series.push(measured_series("j7", "rad", time_s, measured));
         report.effects = named
             .iter()
             .map(|&kind| EffectReport {
