@@ -1,0 +1,333 @@
+#!/usr/bin/env python3
+"""Multi-joint arm recordings made by Drake (pydrake's MultibodyPlant, its SAP discrete solver), a third engine for
+the arms after MuJoCo and Bullet, with dry friction as Drake's own DoorHinge force element makes it: smooth through
+zero speed (tanh), the law real joints have. Two robots that ship with pybullet_data (another project's models),
+the KUKA LBR iiwa 7 R800 and the Franka Panda, prepared exactly as gap_suite_bullet_arms.py prepares them, driven
+by torques for 20 s at 200 Hz. The same case format as gap_suite.py, cases named drake_iiwa_* and drake_panda_*.
+
+    gap_suite_drake_arms.py --out DIR [--seed N] [--only PATTERN]
+
+Needs the pinned packages of gap_suite_drake_requirements.txt (drake, and gap_suite.py's). Every case is a folder
+DIR/<case>/ with model.urdf, recording.csv and truth.json exactly as gap_suite.py describes them; truth.json's
+"engine" is "drake <version>".
+
+Engine: the robot's URDF text (geometry removed, no joint damping of its own, the Panda's fingers welded) parsed
+by pydrake's Parser into a discrete MultibodyPlant (1 ms steps, discrete contact approximation kLagged, so the
+SAP solver), its root link welded to the world, gravity -9.81 z, no collision geometry; one step is the plant's
+own discrete update (ExecuteForcedEvents). Efforts are generalized forces on the applied generalized force input
+port, set at each sample and held between samples; the actuation input (where a rotor makes an actuator) is held
+at zero. The identified-model cases write model.urdf with every link's mass and inertia tensor scaled alike by a
+factor drawn within +-5 % (gap_suite_bullet_arms.identified), the engine keeping the shipped values.
+
+Concealed effects, each made the way Drake's API makes it:
+  coulomb_friction  a DoorHinge force element on the joint with only its dynamic friction set:
+                    -dynamic_friction_torque * tanh(qd / motion_threshold), explicit in the step; truth
+                    friction = dynamic_friction_torque, transition_speed = motion_threshold
+  viscous_damping   Joint.set_default_damping(b), implicit in SAP's step
+  armature          a JointActuator with set_default_rotor_inertia(I_r) and set_default_gear_ratio(rho): Drake's
+                    reflected inertia rho^2 I_r on the mass matrix's diagonal
+  effort_offset     a constant added to the recorded effort (a torque sensor's bias), not engine physics
+
+Checks (a failure stops the run), per case before it is recorded:
+  rigid bodies  Drake's joint-space inertia and bias force (CalcMassMatrix, CalcBiasTerm -
+                CalcGravityGeneralizedForces) of the engine's plant without effects against model.urdf's engine
+                text as MuJoCo reads it, at 5 random states, to 1e-9 relative (gap_suite.compare_dynamics).
+  friction      the joints' generalized forces (CalcForceElementsContribution: the DoorHinge's and the joint's
+                damping) at 5 speeds per joint against -friction * tanh(qd / transition_speed) - damping * qd, to
+                1e-9 relative.
+  armature      the plant's joint-space inertia with the rotors minus without them against the armature set, on
+                the diagonal, to 1e-9 relative; nothing off it.
+Excitation: gap_suite.arm_excitation, the MuJoCo and Bullet arm suites': computed torque with model.urdf (1.5 Hz,
+damping ratio 0.7) around a slow 3-sine target inside the joint ranges, plus 3 sines per joint, decided at 200 Hz
+and held; the controller knows none of the concealed effects. Noise: 1e-4 rad on positions, 1 % of each joint's
+RMS effort on efforts. Levels: the Bullet suite's friction levels (sized to what the excitation asks of each
+joint), smooth over 0.05 rad/s (within the 0.05-0.4 rad/s real joints' friction is smooth over); damping and rotor
+inertia sized so that each is material (truth.json's visibility_effort_share has each one's share).
+"""
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from importlib import metadata
+
+import mujoco
+import numpy as np
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import DiscreteContactApproximation, MultibodyPlant
+from pydrake.multibody.tree import DoorHinge, DoorHingeConfig, MultibodyForces
+
+import gap_suite as gs
+import gap_suite_bullet_arms as bullet
+from gap_suite import DT, SuiteError
+
+ENGINE = f"drake {metadata.version('drake')}"
+DURATION_S, RATE_HZ = 20.0, 200
+TRANSITION_SPEED = 0.05  # rad/s: the DoorHinge's motion_threshold
+GEAR_RATIO = 100.0  # a rotor of armature / GEAR_RATIO^2 behind this gear
+CHECK_RTOL = 1e-9
+
+
+@dataclass
+class ArmCase:
+    """Per joint (in the robot's order): friction (DoorHinge dynamic friction, N m), damping (N m s/rad), armature
+    (reflected rotor inertia, kg m^2), offset (the torque sensor's bias, N m)."""
+
+    name: str
+    description: str
+    robot: str
+    friction: list = field(default_factory=lambda: [0.0] * 7)
+    damping: list = field(default_factory=lambda: [0.0] * 7)
+    armature: list = field(default_factory=lambda: [0.0] * 7)
+    offset: list = field(default_factory=lambda: [0.0] * 7)
+    model_error: float = 0.0
+    engine: str = "drake"
+    duration: float = DURATION_S
+    rate: int = RATE_HZ
+
+    @property
+    def effects(self):
+        """The concealed effects, as truth.json names them (gap_suite_bullet_arms.Effect)."""
+        joints = bullet.ROBOTS[self.robot].joints
+        kinds = (("coulomb_friction", self.friction, lambda f: {"friction": float(f), "transition_speed": TRANSITION_SPEED}),
+                 ("viscous_damping", self.damping, lambda b: {"damping": float(b)}),
+                 ("armature", self.armature, lambda a: {"armature": float(a)}),
+                 ("effort_offset", self.offset, lambda o: {"offset": float(o)}))
+        return [bullet.Effect(n, kind, params(v)) for kind, values, params in kinds for n, v in zip(joints, values) if v]
+
+
+IIWA_FRICTION = bullet.FRICTION
+PANDA_FRICTION = bullet.PANDA_FRICTION
+# Rotor inertia as a geared arm has it: a sizeable share of each joint's own inertia, more on the wrist.
+IIWA_ROTOR = [0.3, 0.3, 0.1, 0.1, 0.02, 0.02, 0.005]
+PANDA_ROTOR = [0.2, 0.2, 0.1, 0.1, 0.05, 0.05, 0.02]
+
+
+def cases():
+    return [
+        ArmCase("drake_iiwa_none", "iiwa; nothing missing", "iiwa"),
+        ArmCase("drake_iiwa_friction", "iiwa; smooth dry friction (DoorHinge) on every joint", "iiwa", friction=IIWA_FRICTION),
+        ArmCase("drake_iiwa_rotor_damping", "iiwa; rotor inertia on every joint, damping on joints 2, 4, 6", "iiwa",
+                damping=[0.0, 1.0, 0.0, 0.3, 0.0, 0.004, 0.0], armature=IIWA_ROTOR),
+        ArmCase("drake_iiwa_identified_model", "iiwa; smooth dry friction on every joint, sensor biases on joints 2 "
+                "and 4, model.urdf's inertias up to 5 % off", "iiwa", friction=IIWA_FRICTION,
+                offset=[0.0, 1.0, 0.0, -0.5, 0.0, 0.0, 0.0], model_error=0.05),
+        ArmCase("drake_panda_none", "Panda; nothing missing", "panda"),
+        ArmCase("drake_panda_friction", "Panda; smooth dry friction (DoorHinge) on every joint", "panda",
+                friction=PANDA_FRICTION),
+        ArmCase("drake_panda_rotor_friction", "Panda; rotor inertia on every joint, smooth dry friction on joints 1, "
+                "3, 5, 7, damping on 2", "panda", friction=[1.0, 0.0, 0.8, 0.0, 0.3, 0.0, 0.05],
+                damping=[0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0], armature=PANDA_ROTOR),
+        ArmCase("drake_panda_identified_model", "Panda; smooth dry friction on every joint, model.urdf's inertias up "
+                "to 5 % off", "panda", friction=PANDA_FRICTION, model_error=0.05),
+    ]
+
+
+ZERO_INERTIAL = ('<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
+                 '</inertial>')
+
+
+def massless_made_explicit(text):
+    """Every link of no mass made massless alike, its rotational inertia zeroed (and one without an <inertial> given
+    that zero one): readers disagree on a link of mass 0 with rotational inertia (the Panda's link 8 and grasp
+    target: 0.1 kg m^2 each), which no body has. Drake's parser replaces it by 1 kg at the link's origin, Bullet
+    keeps its inertia, MuJoCo drops it."""
+
+    def inertial(match):
+        mass = re.search(r'<mass\s+value="([^"]+)"', match[0])
+        return ZERO_INERTIAL if mass is None or float(mass[1]) == 0.0 else match[0]
+
+    def link(match):
+        whole = match[0]
+        if "<inertial>" in whole:
+            return re.sub(r"<inertial>.*?</inertial>", inertial, whole, flags=re.S)
+        if whole.endswith("/>"):
+            return whole[:-2].rstrip() + f">{ZERO_INERTIAL}</link>"
+        return whole.replace("</link>", f"{ZERO_INERTIAL}</link>")
+
+    return re.sub(r"<link\s[^>]*?/>|<link\s[^>]*?>.*?</link>", link, text, flags=re.S)
+
+
+def root_link(text):
+    """The URDF's root link: the one that is no joint's child."""
+    links = re.findall(r'<link\s+name="([^"]+)"', text)
+    children = set(re.findall(r'<child\s+link="([^"]+)"', text))
+    roots = [name for name in links if name not in children]
+    if len(roots) != 1:
+        raise SuiteError(f"the arm's URDF has {len(roots)} root links")
+    return roots[0]
+
+
+class DrakeArm:
+    """An arm in a discrete MultibodyPlant of its own, loaded from URDF text, with DoorHinge friction, joint damping
+    and rotor inertia per joint (`joints`, in order); gap_suite's simulator methods (set_state, state, hold, advance,
+    dynamics, close)."""
+
+    def __init__(self, text, joints, friction=None, damping=None, armature=None):
+        n = len(joints)
+        friction, damping, armature = (np.zeros(n) if x is None else np.asarray(x, float) for x in (friction, damping, armature))
+        self.plant = MultibodyPlant(time_step=DT)
+        self.plant.set_discrete_contact_approximation(DiscreteContactApproximation.kLagged)
+        (instance,) = Parser(self.plant).AddModelsFromString(text, "urdf")
+        self.plant.WeldFrames(self.plant.world_frame(), self.plant.GetBodyByName(root_link(text), instance).body_frame())
+        self.plant.mutable_gravity_field().set_gravity_vector(np.array(gs.GRAVITY))
+        self.names = list(joints)
+        self.joints = [self.plant.GetJointByName(name, instance) for name in joints]
+        self.hinges = []
+        for joint, f, b, a in zip(self.joints, friction, damping, armature):
+            joint.set_default_damping(float(b))
+            if f > 0.0:
+                config = DoorHingeConfig()
+                config.spring_zero_angle_rad = config.spring_constant = 0.0
+                config.catch_width = config.catch_torque = 0.0
+                config.static_friction_torque = config.viscous_friction = 0.0
+                config.dynamic_friction_torque, config.motion_threshold = float(f), TRANSITION_SPEED
+                self.hinges.append((joint, float(f), self.plant.AddForceElement(DoorHinge(joint, config))))
+            if a > 0.0:
+                actuator = self.plant.AddJointActuator(f"{joint.name()}_motor", joint)
+                actuator.set_default_rotor_inertia(float(a) / GEAR_RATIO ** 2)
+                actuator.set_default_gear_ratio(GEAR_RATIO)
+        self.plant.Finalize()
+        if self.plant.get_discrete_contact_solver().name != "kSap":
+            raise SuiteError(f"Drake's discrete solver is {self.plant.get_discrete_contact_solver()}, SAP was expected")
+        self.context = self.plant.CreateDefaultContext()
+        if self.plant.num_actuators():
+            self.plant.get_actuation_input_port().FixValue(self.context, np.zeros(self.plant.num_actuators()))
+        self.qidx = [j.position_start() for j in self.joints]
+        self.vidx = [j.velocity_start() for j in self.joints]
+        self.lo = np.array([j.position_lower_limits()[0] for j in self.joints])
+        self.hi = np.array([j.position_upper_limits()[0] for j in self.joints])
+        self.effort = np.zeros(n)
+        self.hold(self.effort)
+
+    def _full(self, values, idx, size):
+        out = np.zeros(size)
+        out[idx] = values
+        return out
+
+    def set_state(self, q, qd):
+        self.plant.SetPositions(self.context, self._full(q, self.qidx, self.plant.num_positions()))
+        self.plant.SetVelocities(self.context, self._full(qd, self.vidx, self.plant.num_velocities()))
+
+    def state(self):
+        return (self.plant.GetPositions(self.context)[self.qidx].copy(),
+                self.plant.GetVelocities(self.context)[self.vidx].copy())
+
+    def hold(self, effort):
+        self.effort = np.asarray(effort, float).copy()
+        self.plant.get_applied_generalized_force_input_port().FixValue(
+            self.context, self._full(self.effort, self.vidx, self.plant.num_velocities()))
+
+    def advance(self, steps):
+        for _ in range(int(steps)):
+            self.plant.ExecuteForcedEvents(self.context, publish=False)
+
+    def dynamics(self, q, qd):
+        """Joint-space inertia (with reflected rotor inertia) and bias force C(q, qd) qd + g(q) as the plant has
+        them."""
+        self.set_state(q, qd)
+        full = self.plant.CalcMassMatrix(self.context)
+        bias = self.plant.CalcBiasTerm(self.context) - self.plant.CalcGravityGeneralizedForces(self.context)
+        return full[np.ix_(self.vidx, self.vidx)].copy(), bias[self.vidx].copy()
+
+    def force_elements(self, q, qd):
+        """The generalized forces the plant's force elements apply at (q, qd): the DoorHinges' and the joints'
+        damping (gravity, also a force element, acts as spatial forces on the bodies, not among these)."""
+        self.set_state(q, qd)
+        forces = MultibodyForces(self.plant)
+        self.plant.CalcForceElementsContribution(self.context, forces)
+        return forces.generalized_forces()[self.vidx].copy()
+
+    def close(self):
+        self.plant = self.context = self.joints = self.hinges = None
+
+
+def check_rigid(text, joints, rng):
+    """The engine's plant (no effects) against the same text as MuJoCo reads it, at 5 random states."""
+    drake_arm = DrakeArm(text, joints)
+    model = mujoco.MjSpec.from_string(text).compile()
+    mj = gs.MujocoSim(model, joints)
+    for _ in range(5):
+        q, qd = rng.uniform(drake_arm.lo, drake_arm.hi), rng.normal(0.0, 1.0, len(joints))
+        gs.compare_dynamics("Drake arm against MuJoCo", drake_arm.dynamics(q, qd), mj.dynamics(q, qd), CHECK_RTOL)
+    drake_arm.close()
+
+
+def check_effects(plant, bare, case, rng):
+    """The joints' generalized forces (a DoorHinge's friction and the joint's damping, which Drake counts among
+    them) against -friction tanh(qd / transition_speed) - damping qd at 5 speeds per joint, and the rotors' inertia
+    against the armature set, on the diagonal and nothing off it."""
+    q = rng.uniform(plant.lo, plant.hi)
+    for n, (f, b) in enumerate(zip(case.friction, case.damping)):
+        for speed in (-1.0, -0.04, 0.003, 0.05, 0.7):
+            qd = np.zeros(len(q))
+            qd[n] = speed
+            got, want = plant.force_elements(q, qd), np.zeros(len(q))
+            want[n] = -f * math.tanh(speed / TRANSITION_SPEED) - b * speed
+            if np.abs(got - want).max() > CHECK_RTOL * max(1.0, f, b):
+                raise SuiteError(f"{case.name}: Drake's DoorHinge gives {got} at joint {n} speed {speed}, {want} expected")
+    added = plant.dynamics(q, np.zeros(len(q)))[0] - bare.dynamics(q, np.zeros(len(q)))[0]
+    if np.abs(added - np.diag(case.armature)).max() > CHECK_RTOL * max(1.0, max(case.armature)):
+        raise SuiteError(f"{case.name}: Drake's rotors add {np.diag(added)} of inertia, {case.armature} was set")
+
+
+def run_case(case, seed, out):
+    rng = gs.case_rng(seed, case.name)
+    robot = bullet.ROBOTS[case.robot]
+    joints = robot.joints
+    engine_text = massless_made_explicit(bullet.shipped_urdf(robot))
+    check_rigid(engine_text, joints, rng)
+    model_text = bullet.identified(engine_text, case.model_error, rng) if case.model_error > 0 else engine_text
+    nominal = DrakeArm(model_text, joints)
+    plant = DrakeArm(engine_text, joints, case.friction, case.damping, case.armature)
+    bare = DrakeArm(engine_text, joints)
+    check_effects(plant, bare, case, rng)
+    bare.close()
+    q0, source = gs.arm_excitation(nominal, np.zeros(7), robot.home, plant.lo, plant.hi, rng)
+    traj = gs.simulate(plant, gs.sample_steps(case.duration, case.rate, False, rng), q0, source)
+    plant.close()
+    table = {"time": traj.t}
+    table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(joints)})
+    effort_sigma = {n: 0.01 * gs.rms(traj.effort[:, i]) for i, n in enumerate(joints)}
+    table.update({f"{n}.effort": traj.effort[:, i] + case.offset[i] + rng.normal(0.0, effort_sigma[n], len(traj.t))
+                  for i, n in enumerate(joints)})
+    source_path = "/".join(robot.path)
+    note = f"pybullet_data {source_path} without geometry and without joint damping, fingers (if any) welded"
+    note += "; inertial parameters drawn up to 5 % off (an identified model)" if case.model_error > 0 else ""
+    model_effort = gs.inverse_dynamics(nominal, traj, np.gradient(traj.qd, traj.t, axis=0))
+    nominal.close()
+    detail = {
+        "coulomb_friction": f"DoorHinge force element, dynamic_friction_torque = friction, motion_threshold = "
+                            f"{TRANSITION_SPEED} (-friction tanh(qd / {TRANSITION_SPEED})), explicit in the step",
+        "viscous_damping": "Joint.set_default_damping, implicit in SAP's step",
+        "armature": f"JointActuator rotor inertia armature / {GEAR_RATIO:g}^2 behind a {GEAR_RATIO:g}:1 gear (reflected "
+                    "inertia), actuation input zero",
+        "effort_offset": "added to the recorded effort (a torque sensor's bias)",
+    }
+    effects = case.effects
+    truth = {
+        "format": gs.TRUTH_FORMAT, "engine": ENGINE, "case": case.name, "description": case.description,
+        "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params, "engine_detail": detail[e.kind]} for e in effects],
+        "joints": joints,
+        "engine_detail": f"{ENGINE}, {note}; discrete MultibodyPlant (SAP, kLagged), root welded, {DT} s steps "
+                         "(ExecuteForcedEvents), efforts through the applied generalized force port, held between "
+                         "samples; rigid bodies checked against MuJoCo's reading of the same URDF to "
+                         f"{CHECK_RTOL:g}",
+        "seed": seed, "duration_s": case.duration, "rate_hz": case.rate, "timestep_s": DT, "sampling": "uniform",
+        "observed": "joint positions",
+        "noise": {"q_rad": 1e-4, **{f"{n}.effort": gs.sig3(s) for n, s in effort_sigma.items()}},
+        "dropouts": 0.0,
+        "excitation": "computed torque with model.urdf (1.5 Hz, damping ratio 0.7) around a slow 3-sine target "
+                      "(0.05-0.3 Hz) + 3 sines per joint (0.5-3 Hz), decided at 200 Hz and held (gap_suite.arm_excitation)",
+        "visibility_effort_share": gs.effect_shares(effects, joints, traj, model_effort),
+    }
+    folder = os.path.join(out, case.name)
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
+        f.write(model_text.replace("<robot ", f"<!-- {note} -->\n<robot ", 1))
+    gs.write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf", "gravity": "0 0 -9.81"})
+    gs.write_json(os.path.join(folder, "truth.json"), truth)
+    return gs.summary_line(case, traj, truth)
+
+
+if __name__ == "__main__":
+    gs.engine_suite_main(cases, run_case)
