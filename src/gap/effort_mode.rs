@@ -561,9 +561,10 @@ fn drop_what_the_motion_does_not_show(
     held
 }
 
-/// Nothing unphysical is reported: a term whose level the final reading fits negative (or a part
-/// outside the plausible weights) is dropped, the others fitted again, and named among the
-/// rejected ([`EffortProblem::physical_reading`]).
+/// Nothing unphysical or immaterial is reported: a term whose level the final reading fits
+/// negative (or a part outside the plausible weights), or whose effort it fits under the share
+/// every term needed to enter, is dropped, the others fitted again, and named among the rejected
+/// ([`EffortProblem::physical_reading`]).
 fn keep_physical(found: &mut Identified<'_>) {
     let (terms, dropped) = found.problem.physical_reading(&found.terms);
     if dropped.is_empty() {
@@ -571,12 +572,20 @@ fn keep_physical(found: &mut Identified<'_>) {
     }
     found.findings = findings_with_stops(&found.problem, &terms, &found.stops);
     found.terms = terms;
-    for (r, kind) in dropped {
-        let line = format!(
-            "{}: with the other terms settled, its level fits outside what the kind can physically be (a negative damping or \
-             friction level, a part outside the plausible weights), so it is not reported",
-            kind.name()
-        );
+    for (r, kind, immaterial) in dropped {
+        let line = match immaterial {
+            Some(share) => format!(
+                "{}: with the other terms settled, it comes to {:.1} % of the joint's own effort, under what any term must \
+                 be to enter, so it is not reported",
+                kind.name(),
+                100.0 * share
+            ),
+            None => format!(
+                "{}: with the other terms settled, its level fits outside what the kind can physically be (a negative \
+                 damping or friction level, a part outside the plausible weights), so it is not reported",
+                kind.name()
+            ),
+        };
         found.overruled.push((r, kind.name().to_string(), line));
     }
 }
