@@ -192,17 +192,29 @@ def run_case(case, seed, out):
     with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
         f.write(model_text.replace("<robot ", f"{note}\n<robot ", 1))
     gs.write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf", "gravity": "0 0 -9.81"})
-    effects = case.effects
     model_effort = gs.inverse_dynamics(nominal, traj, np.gradient(traj.qd, traj.t, axis=0))
     nominal.close()
     detail = {"coulomb_friction": "VELOCITY_CONTROL motor, target speed 0, force bound = friction",
               "viscous_damping": "changeDynamics(jointDamping)"}
-    truth = {
-        "format": gs.TRUTH_FORMAT, "engine": ENGINE, "case": case.name, "description": case.description,
+    engine_detail = (f"{ENGINE}, pybullet_data {source_path} (no geometry, no joint damping of its own, fingers welded), "
+                     f"DIRECT, fixed base, {DT} s steps, link damping 0, torques through TORQUE_CONTROL set before every step")
+    truth = arm_truth(ENGINE, case, seed, (detail, engine_detail), traj, effort_sigma, model_effort)
+    gs.write_json(os.path.join(folder, "truth.json"), truth)
+    return gs.summary_line(case, traj, truth)
+
+
+def arm_truth(engine, case, seed, details, traj, effort_sigma, model_effort):
+    """truth.json of an arm case recorded by `engine` with gap_suite.arm_excitation: `details` is (how the engine made
+    each effect kind, how it made the recording), `effort_sigma` the noise put on each joint's effort, `model_effort`
+    model.urdf's inverse dynamics along the motion (for the effects' shares)."""
+    detail, engine_detail = details
+    joints = ROBOTS[case.robot].joints
+    effects = case.effects
+    return {
+        "format": gs.TRUTH_FORMAT, "engine": engine, "case": case.name, "description": case.description,
         "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params, "engine_detail": detail[e.kind]} for e in effects],
         "joints": joints,
-        "engine_detail": f"{ENGINE}, pybullet_data {source_path} (no geometry, no joint damping of its own, fingers welded), DIRECT, "
-                         f"fixed base, {DT} s steps, link damping 0, torques through TORQUE_CONTROL set before every step",
+        "engine_detail": engine_detail,
         "seed": seed, "duration_s": case.duration, "rate_hz": case.rate, "timestep_s": DT, "sampling": "uniform",
         "observed": "joint positions",
         "noise": {"q_rad": 1e-4, **{f"{n}.effort": gs.sig3(s) for n, s in effort_sigma.items()}},
@@ -211,8 +223,6 @@ def run_case(case, seed, out):
                       "(0.05-0.3 Hz) + 3 sines per joint (0.5-3 Hz), decided at 200 Hz and held (gap_suite.arm_excitation)",
         "visibility_effort_share": gs.effect_shares(effects, joints, traj, model_effort),
     }
-    gs.write_json(os.path.join(folder, "truth.json"), truth)
-    return gs.summary_line(case, traj, truth)
 
 
 if __name__ == "__main__":

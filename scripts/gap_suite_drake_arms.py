@@ -58,31 +58,24 @@ from pydrake.multibody.tree import DoorHinge, DoorHingeConfig, MultibodyForces
 
 import gap_suite as gs
 import gap_suite_bullet_arms as bullet
+import gap_suite_drake
 from gap_suite import DT, SuiteError
 
 ENGINE = f"drake {metadata.version('drake')}"
-DURATION_S, RATE_HZ = 20.0, 200
 TRANSITION_SPEED = 0.05  # rad/s: the DoorHinge's motion_threshold
 GEAR_RATIO = 100.0  # a rotor of armature / GEAR_RATIO^2 behind this gear
 CHECK_RTOL = 1e-9
 
 
 @dataclass
-class ArmCase:
-    """Per joint (in the robot's order): friction (DoorHinge dynamic friction, N m), damping (N m s/rad), armature
-    (reflected rotor inertia, kg m^2), offset (the torque sensor's bias, N m)."""
+class ArmCase(bullet.ArmCase):
+    """The Bullet suite's arm case, with per joint (in the robot's order) also armature (reflected rotor inertia,
+    kg m^2) and offset (the torque sensor's bias, N m); friction is a DoorHinge's dynamic friction (N m), smooth
+    over TRANSITION_SPEED."""
 
-    name: str
-    description: str
-    robot: str
-    friction: list = field(default_factory=lambda: [0.0] * 7)
-    damping: list = field(default_factory=lambda: [0.0] * 7)
     armature: list = field(default_factory=lambda: [0.0] * 7)
     offset: list = field(default_factory=lambda: [0.0] * 7)
-    model_error: float = 0.0
     engine: str = "drake"
-    duration: float = DURATION_S
-    rate: int = RATE_HZ
 
     @property
     def effects(self):
@@ -157,12 +150,11 @@ def root_link(text):
     return roots[0]
 
 
-class DrakeArm:
+class DrakeArm(gap_suite_drake.DrakeSim):
     """An arm in a discrete MultibodyPlant of its own, loaded from URDF text, with DoorHinge friction, joint damping
-    and rotor inertia per joint (`joints`, in order); gap_suite's simulator methods (set_state, state, hold, advance,
-    dynamics, close)."""
+    and rotor inertia per joint (`joints`, in order): gap_suite_drake.DrakeSim's stepping, state and dynamics."""
 
-    def __init__(self, text, joints, friction=None, damping=None, armature=None):
+    def __init__(self, text, joints, friction=None, damping=None, armature=None):  # noqa: DrakeSim builds from mechanisms
         n = len(joints)
         friction, damping, armature = (np.zeros(n) if x is None else np.asarray(x, float) for x in (friction, damping, armature))
         self.plant = MultibodyPlant(time_step=DT)
@@ -199,36 +191,6 @@ class DrakeArm:
         self.effort = np.zeros(n)
         self.hold(self.effort)
 
-    def _full(self, values, idx, size):
-        out = np.zeros(size)
-        out[idx] = values
-        return out
-
-    def set_state(self, q, qd):
-        self.plant.SetPositions(self.context, self._full(q, self.qidx, self.plant.num_positions()))
-        self.plant.SetVelocities(self.context, self._full(qd, self.vidx, self.plant.num_velocities()))
-
-    def state(self):
-        return (self.plant.GetPositions(self.context)[self.qidx].copy(),
-                self.plant.GetVelocities(self.context)[self.vidx].copy())
-
-    def hold(self, effort):
-        self.effort = np.asarray(effort, float).copy()
-        self.plant.get_applied_generalized_force_input_port().FixValue(
-            self.context, self._full(self.effort, self.vidx, self.plant.num_velocities()))
-
-    def advance(self, steps):
-        for _ in range(int(steps)):
-            self.plant.ExecuteForcedEvents(self.context, publish=False)
-
-    def dynamics(self, q, qd):
-        """Joint-space inertia (with reflected rotor inertia) and bias force C(q, qd) qd + g(q) as the plant has
-        them."""
-        self.set_state(q, qd)
-        full = self.plant.CalcMassMatrix(self.context)
-        bias = self.plant.CalcBiasTerm(self.context) - self.plant.CalcGravityGeneralizedForces(self.context)
-        return full[np.ix_(self.vidx, self.vidx)].copy(), bias[self.vidx].copy()
-
     def force_elements(self, q, qd):
         """The generalized forces the plant's force elements apply at (q, qd): the DoorHinges' and the joints'
         damping (gravity, also a force element, acts as spatial forces on the bodies, not among these)."""
@@ -237,8 +199,6 @@ class DrakeArm:
         self.plant.CalcForceElementsContribution(self.context, forces)
         return forces.generalized_forces()[self.vidx].copy()
 
-    def close(self):
-        self.plant = self.context = self.joints = self.hinges = None
 
 
 def check_rigid(text, joints, rng):
@@ -303,23 +263,10 @@ def run_case(case, seed, out):
                     "inertia), actuation input zero",
         "effort_offset": "added to the recorded effort (a torque sensor's bias)",
     }
-    effects = case.effects
-    truth = {
-        "format": gs.TRUTH_FORMAT, "engine": ENGINE, "case": case.name, "description": case.description,
-        "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params, "engine_detail": detail[e.kind]} for e in effects],
-        "joints": joints,
-        "engine_detail": f"{ENGINE}, {note}; discrete MultibodyPlant (SAP, kLagged), root welded, {DT} s steps "
-                         "(ExecuteForcedEvents), efforts through the applied generalized force port, held between "
-                         "samples; rigid bodies checked against MuJoCo's reading of the same URDF to "
-                         f"{CHECK_RTOL:g}",
-        "seed": seed, "duration_s": case.duration, "rate_hz": case.rate, "timestep_s": DT, "sampling": "uniform",
-        "observed": "joint positions",
-        "noise": {"q_rad": 1e-4, **{f"{n}.effort": gs.sig3(s) for n, s in effort_sigma.items()}},
-        "dropouts": 0.0,
-        "excitation": "computed torque with model.urdf (1.5 Hz, damping ratio 0.7) around a slow 3-sine target "
-                      "(0.05-0.3 Hz) + 3 sines per joint (0.5-3 Hz), decided at 200 Hz and held (gap_suite.arm_excitation)",
-        "visibility_effort_share": gs.effect_shares(effects, joints, traj, model_effort),
-    }
+    engine_detail = (f"{ENGINE}, {note}; discrete MultibodyPlant (SAP, kLagged), root welded, {DT} s steps "
+                     "(ExecuteForcedEvents), efforts through the applied generalized force port, held between samples; "
+                     f"rigid bodies checked against MuJoCo's reading of the same URDF to {CHECK_RTOL:g}")
+    truth = bullet.arm_truth(ENGINE, case, seed, (detail, engine_detail), traj, effort_sigma, model_effort)
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
