@@ -176,14 +176,7 @@ def run_case(case, seed, out):
     model_text = identified(engine_text, case.model_error, rng) if case.model_error > 0 else engine_text
     nominal = BulletArm(model_text, joints, [0.0] * 7, [0.0] * 7)
     plant = BulletArm(engine_text, joints, case.friction, case.damping)
-    q0, source = gs.arm_excitation(nominal, np.zeros(7), robot.home, plant.lo, plant.hi, rng)
-    traj = gs.simulate(plant, gs.sample_steps(case.duration, case.rate, False, rng), q0, source)
-    plant.close()
-    table = {"time": traj.t}
-    table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(joints)})
-    effort_sigma = {n: 0.01 * gs.rms(traj.effort[:, i]) for i, n in enumerate(joints)}
-    table.update({f"{n}.effort": traj.effort[:, i] + rng.normal(0.0, effort_sigma[n], len(traj.t))
-                  for i, n in enumerate(joints)})
+    traj, table, effort_sigma = drive(plant, nominal, case, rng)
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
     source_path = "/".join(robot.path)
@@ -201,6 +194,23 @@ def run_case(case, seed, out):
     truth = arm_truth(ENGINE, case, seed, (detail, engine_detail), traj, effort_sigma, model_effort)
     gs.write_json(os.path.join(folder, "truth.json"), truth)
     return gs.summary_line(case, traj, truth)
+
+
+def drive(plant, nominal, case, rng, offsets=None):
+    """The plant driven by gap_suite.arm_excitation (computed torque with `nominal`) for the case's duration, then
+    closed: (the trajectory, the recording's table with 1e-4 rad of noise on positions and 1 % of each joint's RMS
+    effort on efforts, plus each joint's `offsets` (a torque sensor's bias), that effort noise per joint)."""
+    joints = ROBOTS[case.robot].joints
+    q0, source = gs.arm_excitation(nominal, np.zeros(7), ROBOTS[case.robot].home, plant.lo, plant.hi, rng)
+    traj = gs.simulate(plant, gs.sample_steps(case.duration, case.rate, False, rng), q0, source)
+    plant.close()
+    bias = np.zeros(len(joints)) if offsets is None else np.asarray(offsets, float)
+    table = {"time": traj.t}
+    table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(joints)})
+    effort_sigma = {n: 0.01 * gs.rms(traj.effort[:, i]) for i, n in enumerate(joints)}
+    table.update({f"{n}.effort": traj.effort[:, i] + bias[i] + rng.normal(0.0, effort_sigma[n], len(traj.t))
+                  for i, n in enumerate(joints)})
+    return traj, table, effort_sigma
 
 
 def arm_truth(engine, case, seed, details, traj, effort_sigma, model_effort):

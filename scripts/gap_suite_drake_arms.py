@@ -242,14 +242,7 @@ def run_case(case, seed, out):
     bare = DrakeArm(engine_text, joints)
     check_effects(plant, bare, case, rng)
     bare.close()
-    q0, source = gs.arm_excitation(nominal, np.zeros(7), robot.home, plant.lo, plant.hi, rng)
-    traj = gs.simulate(plant, gs.sample_steps(case.duration, case.rate, False, rng), q0, source)
-    plant.close()
-    table = {"time": traj.t}
-    table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(joints)})
-    effort_sigma = {n: 0.01 * gs.rms(traj.effort[:, i]) for i, n in enumerate(joints)}
-    table.update({f"{n}.effort": traj.effort[:, i] + case.offset[i] + rng.normal(0.0, effort_sigma[n], len(traj.t))
-                  for i, n in enumerate(joints)})
+    traj, table, effort_sigma = bullet.drive(plant, nominal, case, rng, case.offset)
     source_path = "/".join(robot.path)
     note = f"pybullet_data {source_path} without geometry and without joint damping, fingers (if any) welded"
     note += "; inertial parameters drawn up to 5 % off (an identified model)" if case.model_error > 0 else ""
