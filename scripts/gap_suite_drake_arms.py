@@ -164,7 +164,6 @@ class DrakeArm(gap_suite_drake.DrakeSim):
         self.plant.mutable_gravity_field().set_gravity_vector(np.array(gs.GRAVITY))
         self.names = list(joints)
         self.joints = [self.plant.GetJointByName(name, instance) for name in joints]
-        self.hinges = []
         for joint, f, b, a in zip(self.joints, friction, damping, armature):
             joint.set_default_damping(float(b))
             if f > 0.0:
@@ -173,7 +172,7 @@ class DrakeArm(gap_suite_drake.DrakeSim):
                 config.catch_width = config.catch_torque = 0.0
                 config.static_friction_torque = config.viscous_friction = 0.0
                 config.dynamic_friction_torque, config.motion_threshold = float(f), TRANSITION_SPEED
-                self.hinges.append((joint, float(f), self.plant.AddForceElement(DoorHinge(joint, config))))
+                self.plant.AddForceElement(DoorHinge(joint, config))
             if a > 0.0:
                 actuator = self.plant.AddJointActuator(f"{joint.name()}_motor", joint)
                 actuator.set_default_rotor_inertia(float(a) / GEAR_RATIO ** 2)
@@ -200,16 +199,13 @@ class DrakeArm(gap_suite_drake.DrakeSim):
         return forces.generalized_forces()[self.vidx].copy()
 
 
-
-def check_rigid(text, joints, rng):
-    """The engine's plant (no effects) against the same text as MuJoCo reads it, at 5 random states."""
-    drake_arm = DrakeArm(text, joints)
-    model = mujoco.MjSpec.from_string(text).compile()
-    mj = gs.MujocoSim(model, joints)
+def check_rigid(bare, text, rng):
+    """The engine's plant without effects (`bare`, of URDF `text`) against the same text as MuJoCo reads it, at 5
+    random states."""
+    mj = gs.MujocoSim(mujoco.MjSpec.from_string(text).compile(), bare.names)
     for _ in range(5):
-        q, qd = rng.uniform(drake_arm.lo, drake_arm.hi), rng.normal(0.0, 1.0, len(joints))
-        gs.compare_dynamics("Drake arm against MuJoCo", drake_arm.dynamics(q, qd), mj.dynamics(q, qd), CHECK_RTOL)
-    drake_arm.close()
+        q, qd = rng.uniform(bare.lo, bare.hi), rng.normal(0.0, 1.0, len(bare.names))
+        gs.compare_dynamics("Drake arm against MuJoCo", bare.dynamics(q, qd), mj.dynamics(q, qd), CHECK_RTOL)
 
 
 def check_effects(plant, bare, case, rng):
@@ -224,7 +220,7 @@ def check_effects(plant, bare, case, rng):
             got, want = plant.force_elements(q, qd), np.zeros(len(q))
             want[n] = -f * math.tanh(speed / TRANSITION_SPEED) - b * speed
             if np.abs(got - want).max() > CHECK_RTOL * max(1.0, f, b):
-                raise SuiteError(f"{case.name}: Drake's DoorHinge gives {got} at joint {n} speed {speed}, {want} expected")
+                raise SuiteError(f"{case.name}: Drake's joint forces are {got} at joint {n} speed {speed}, {want} expected")
     added = plant.dynamics(q, np.zeros(len(q)))[0] - bare.dynamics(q, np.zeros(len(q)))[0]
     if np.abs(added - np.diag(case.armature)).max() > CHECK_RTOL * max(1.0, max(case.armature)):
         raise SuiteError(f"{case.name}: Drake's rotors add {np.diag(added)} of inertia, {case.armature} was set")
@@ -235,11 +231,11 @@ def run_case(case, seed, out):
     robot = bullet.ROBOTS[case.robot]
     joints = robot.joints
     engine_text = massless_made_explicit(bullet.shipped_urdf(robot))
-    check_rigid(engine_text, joints, rng)
+    bare = DrakeArm(engine_text, joints)
+    check_rigid(bare, engine_text, rng)
     model_text = bullet.identified(engine_text, case.model_error, rng) if case.model_error > 0 else engine_text
     nominal = DrakeArm(model_text, joints)
     plant = DrakeArm(engine_text, joints, case.friction, case.damping, case.armature)
-    bare = DrakeArm(engine_text, joints)
     check_effects(plant, bare, case, rng)
     bare.close()
     traj, table, effort_sigma = bullet.drive(plant, nominal, case, rng, case.offset)
