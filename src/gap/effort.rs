@@ -2469,6 +2469,11 @@ mod tests {
         EffortProblem::new(model, &sig, gravity, &rows, &excluded, &vec![true; time_s.len()], rules).expect("problem")
     }
 
+    /// The first candidate of `kind` on effort row `row`.
+    fn first_candidate(problem: &EffortProblem<'_>, row: usize, kind: EffectKind) -> usize {
+        (0..problem.candidates.len()).find(|&c| problem.candidates[c].row == row && problem.candidates[c].kind == kind).expect("candidate")
+    }
+
     fn two_link_model() -> GapModel {
         super::super::model::parse_model(TWO_LINK_ARM, std::path::Path::new("arm.urdf")).expect("model")
     }
@@ -2480,11 +2485,7 @@ mod tests {
         // Without the model's own first-moment error, which couples every joint of a chain.
         let rules = SelectionRules { first_moment_tolerance: 0.0, ..SelectionRules::default() };
         let problem = two_link_problem(&model, &tree, rules);
-        let first_of = |row: usize, kind: EffectKind| {
-            (0..problem.candidates.len())
-                .find(|&c| problem.candidates[c].row == row && problem.candidates[c].kind == kind)
-                .expect("candidate")
-        };
+        let first_of = |row: usize, kind: EffectKind| first_candidate(&problem, row, kind);
         // The forearm's heavier part loads the shoulder too: one block with both joints' terms.
         let heavier = first_of(1, EffectKind::MassScale);
         assert_eq!(problem.rows_of(heavier), vec![0, 1]);
@@ -2559,11 +2560,7 @@ mod tests {
         let (tree, _) = model.multibody().expect("tree");
         let rules = SelectionRules { first_moment_tolerance: 0.0, ..SelectionRules::default() };
         let problem = two_link_problem_damped(&model, &tree, rules, damping);
-        let first_of = |row: usize, kind: EffectKind| {
-            (0..problem.candidates.len())
-                .find(|&c| problem.candidates[c].row == row && problem.candidates[c].kind == kind)
-                .expect("candidate")
-        };
+        let first_of = |row: usize, kind: EffectKind| first_candidate(&problem, row, kind);
         let mut set = vec![
             first_of(0, EffectKind::CoulombFriction),
             first_of(1, EffectKind::CoulombFriction),
