@@ -397,6 +397,154 @@ struct RowGram {
     folds: Vec<(Vec<f64>, Vec<f64>, f64, usize)>,
 }
 
+/// The normal equations of every pair of columns, summed over the effort rows and over the
+/// folds other than each one in turn (and over all of them): what [`EffortProblem::solve`]
+/// picks its matrix from, instead of adding up the rows' Gram matrices afresh for every
+/// candidate set and fold (most of forward selection's time on a chain, whose every fit holds
+/// the model's own accuracy). Each sum adds the same numbers in the same order as that assembly
+/// did (rows ascending, then folds ascending), so the fits are its bit for bit (test
+/// `blocks_solved_apart_give_the_joint_solve_and_a_heavier_part_couples_its_joints`).
+///
+/// Most columns live on one row (a joint's own terms): their pairs are that row's Gram summed
+/// over folds. A column on several rows (the model's accuracy, a heavier part) keeps its sums
+/// with every column. Memory: (folds + 1) · (Σ rows' columns² + multi-row columns · columns).
+#[derive(Debug, Clone, Default)]
+struct NormalSums {
+    /// Per column: the rows it is on, ascending, with its index among each row's Gram columns.
+    rows_of: Vec<Vec<(usize, usize)>>,
+    /// Per column: where its sums are.
+    place: Vec<SumPlace>,
+    /// Per row, per fold left out (then none: index `folds`): its Gram matrix summed over the
+    /// other folds (the row's columns², row-major).
+    row_grams: Vec<(usize, Vec<Vec<f64>>)>,
+    /// Per column on several rows, per fold left out (then none): its sums with every column.
+    multi: Vec<Vec<Vec<f64>>>,
+    /// Per fold left out (then none), per column: its products with the residual, summed.
+    rhs: Vec<Vec<f64>>,
+}
+
+/// Where [`NormalSums`] keeps a column's sums.
+#[derive(Debug, Clone, Copy)]
+enum SumPlace {
+    /// No used row holds the column.
+    Nowhere,
+    /// On one row: the row and the column's index among that row's Gram columns.
+    Row(usize, usize),
+    /// On several rows: its index in [`NormalSums::multi`].
+    Multi(usize),
+}
+
+impl NormalSums {
+    /// The sums of `grams` (each row's columns ascending) over `columns` columns and `folds` folds.
+    fn new(grams: &[RowGram], columns: usize, folds: usize) -> Self {
+        let mut rows_of: Vec<Vec<(usize, usize)>> = vec![Vec::new(); columns];
+        for (r, g) in grams.iter().enumerate() {
+            for (la, &c) in g.columns.iter().enumerate() {
+                rows_of[c].push((r, la));
+            }
+        }
+        let mut multi_count = 0;
+        let place: Vec<SumPlace> = rows_of
+            .iter()
+            .map(|rows| match rows.as_slice() {
+                [] => SumPlace::Nowhere,
+                &[(r, la)] => SumPlace::Row(r, la),
+                _ => {
+                    multi_count += 1;
+                    SumPlace::Multi(multi_count - 1)
+                }
+            })
+            .collect();
+        let row_grams = grams
+            .iter()
+            .map(|g| {
+                let m = g.columns.len();
+                let per_skip = (0..=folds)
+                    .map(|skip| {
+                        let mut sum = vec![0.0; m * m];
+                        for (_, f) in g.folds.iter().enumerate().filter(|(k, _)| *k != skip) {
+                            sum.iter_mut().zip(&f.0).for_each(|(s, v)| *s += v);
+                        }
+                        sum
+                    })
+                    .collect();
+                (m, per_skip)
+            })
+            .collect();
+        let multi = (0..columns)
+            .filter(|&c| matches!(place[c], SumPlace::Multi(_)))
+            .map(|u| {
+                let mut per_skip = vec![vec![0.0; columns]; folds + 1];
+                for c in 0..columns {
+                    // The rows both columns are on, ascending, with `u`'s index there and `c`'s.
+                    let shared: Vec<(usize, usize, usize)> = rows_of[u]
+                        .iter()
+                        .filter_map(|&(r, lu)| rows_of[c].iter().find(|(rc, _)| *rc == r).map(|&(_, lc)| (r, lu, lc)))
+                        .collect();
+                    if shared.is_empty() {
+                        continue;
+                    }
+                    for (skip, sums) in per_skip.iter_mut().enumerate() {
+                        let mut total = 0.0;
+                        for &(r, lu, lc) in &shared {
+                            let m = grams[r].columns.len();
+                            for (_, f) in grams[r].folds.iter().enumerate().filter(|(k, _)| *k != skip) {
+                                total += f.0[lu * m + lc];
+                            }
+                        }
+                        sums[c] = total;
+                    }
+                }
+                per_skip
+            })
+            .collect();
+        // Sums in the assembly's order: rows ascending, then folds other than the one left out.
+        let rhs = (0..=folds)
+            .map(|skip| {
+                (0..columns)
+                    .map(|c| {
+                        let mut total = 0.0;
+                        for &(r, la) in &rows_of[c] {
+                            for (_, f) in grams[r].folds.iter().enumerate().filter(|(k, _)| *k != skip) {
+                                total += f.1[la];
+                            }
+                        }
+                        total
+                    })
+                    .collect()
+            })
+            .collect();
+        Self { rows_of, place, row_grams, multi, rhs }
+    }
+
+    /// The normal equations (p × p row-major, and p) of the columns `cols` over the folds other
+    /// than `skip` (None: all).
+    fn normal_equations(&self, cols: &[usize], skip: Option<usize>) -> (Vec<f64>, Vec<f64>) {
+        let p = cols.len();
+        let s = skip.unwrap_or(self.rhs.len().saturating_sub(1));
+        let mut a = vec![0.0; p * p];
+        let b: Vec<f64> = cols.iter().map(|&c| self.rhs.get(s).and_then(|r| r.get(c)).copied().unwrap_or(0.0)).collect();
+        // Every sum is symmetric to the bit (the rows' Gram matrices are mirrored copies, and
+        // both halves are added in one order): the lower half is filled, then mirrored.
+        for (i, &ci) in cols.iter().enumerate() {
+            for (j, &cj) in cols.iter().enumerate().take(i + 1) {
+                let v = match (self.place[ci], self.place[cj]) {
+                    (SumPlace::Multi(u), _) => self.multi[u][s][cj],
+                    (_, SumPlace::Multi(u)) => self.multi[u][s][ci],
+                    (SumPlace::Row(ri, li), SumPlace::Row(rj, lj)) if ri == rj => {
+                        let (m, per_skip) = &self.row_grams[ri];
+                        per_skip[s][li * m + lj]
+                    }
+                    _ => 0.0,
+                };
+                a[i * p + j] = v;
+                a[j * p + i] = v;
+            }
+        }
+        (a, b)
+    }
+}
+
 /// One identified joint (an effort row).
 #[derive(Debug, Clone)]
 pub struct RowInfo {
@@ -543,6 +691,8 @@ pub struct EffortProblem<'a> {
     columns: Vec<Column>,
     candidates: Vec<Candidate>,
     grams: Vec<RowGram>,
+    /// The normal equations of every pair of columns, summed ([`NormalSums`]).
+    sums: NormalSums,
     fold_of: Vec<usize>,
     weights: Vec<f64>,
     used: Vec<Vec<bool>>,
@@ -741,6 +891,7 @@ impl<'a> EffortProblem<'a> {
             columns: Vec::new(),
             candidates: Vec::new(),
             grams: Vec::new(),
+            sums: NormalSums::default(),
             fold_of: Vec::new(),
             weights: Vec::new(),
             used,
@@ -762,6 +913,7 @@ impl<'a> EffortProblem<'a> {
         problem.add_model_accuracy(&tree, sig, gravity, &beyond);
         problem.weights = problem.rows.iter().map(|r| 1.0 / robust_scale(&r.residual).max(1e-9).powi(2)).collect();
         problem.build_grams();
+        problem.sums = NormalSums::new(&problem.grams, problem.columns.len(), problem.rules.folds.max(2));
         Some(problem)
     }
 
@@ -1246,32 +1398,20 @@ impl EffortProblem<'_> {
     /// Per effort row, the pairs (index among the row's Gram columns, index in `cols`) of the
     /// columns of `cols` (sorted) that the row holds, in the row's column order.
     fn local_maps(&self, cols: &[usize]) -> Vec<Vec<(usize, usize)>> {
-        self.grams
-            .iter()
-            .map(|g| g.columns.iter().enumerate().filter_map(|(li, c)| cols.binary_search(c).ok().map(|gi| (li, gi))).collect())
-            .collect()
-    }
-
-    /// Weighted least squares of the columns `cols` (`maps`: their [`Self::local_maps`]) on the
-    /// folds other than `skip` (None: all).
-    fn solve(&self, cols: &[usize], maps: &[Vec<(usize, usize)>], skip: Option<usize>) -> Vec<f64> {
-        let p = cols.len();
-        let mut a = vec![0.0; p * p];
-        let mut b = vec![0.0; p];
-        for (g, local) in self.grams.iter().zip(maps) {
-            let m = g.columns.len();
-            for (k, f) in g.folds.iter().enumerate() {
-                if Some(k) == skip {
-                    continue;
-                }
-                for &(la, ga) in local {
-                    b[ga] += f.1[la];
-                    for &(lb, gb) in local {
-                        a[ga * p + gb] += f.0[la * m + lb];
-                    }
-                }
+        let mut maps = vec![Vec::new(); self.grams.len()];
+        for (gi, &c) in cols.iter().enumerate() {
+            for &(r, li) in self.sums.rows_of.get(c).map_or(&[][..], Vec::as_slice) {
+                maps[r].push((li, gi));
             }
         }
+        maps
+    }
+
+    /// Weighted least squares of the columns `cols` (sorted) on the folds other than `skip`
+    /// (None: all), their normal equations picked from [`NormalSums`].
+    fn solve(&self, cols: &[usize], skip: Option<usize>) -> Vec<f64> {
+        let (mut a, b) = self.sums.normal_equations(cols, skip);
+        let p = cols.len();
         // A whisper of ridge keeps exactly collinear columns (look-alike kinds) solvable; the
         // model's own error has its prior.
         for (i, &c) in cols.iter().enumerate() {
@@ -1296,7 +1436,7 @@ impl EffortProblem<'_> {
         let mut fold_sse = vec![vec![0.0; k]; touched.len()];
         let mut theta_without = Vec::with_capacity(k);
         for fold in 0..k {
-            let theta = self.solve(cols, &maps, Some(fold));
+            let theta = self.solve(cols, Some(fold));
             for (row_sse, &r) in fold_sse.iter_mut().zip(&touched) {
                 let g = &self.grams[r];
                 let (gram, cr, rr, _) = &g.folds[fold];
@@ -1313,7 +1453,7 @@ impl EffortProblem<'_> {
             }
             theta_without.push(theta);
         }
-        BlockFit { rows: touched, fold_sse, theta: self.solve(cols, &maps, None), theta_without }
+        BlockFit { rows: touched, fold_sse, theta: self.solve(cols, None), theta_without }
     }
 
     fn evaluate(&self, set: &[usize]) -> Evaluation {
@@ -2470,6 +2610,31 @@ mod tests {
     }
 
     /// The first candidate of `kind` on effort row `row`.
+    /// [`EffortProblem::solve`] with its normal equations added up afresh from the rows' Gram
+    /// matrices (rows ascending, then folds), not picked from [`NormalSums`].
+    fn assembled_solve(problem: &EffortProblem<'_>, cols: &[usize], skip: Option<usize>) -> Vec<f64> {
+        let p = cols.len();
+        let mut a = vec![0.0; p * p];
+        let mut b = vec![0.0; p];
+        for g in &problem.grams {
+            let m = g.columns.len();
+            let local: Vec<(usize, usize)> =
+                g.columns.iter().enumerate().filter_map(|(li, c)| cols.binary_search(c).ok().map(|gi| (li, gi))).collect();
+            for (_, f) in g.folds.iter().enumerate().filter(|(k, _)| Some(*k) != skip) {
+                for &(la, ga) in &local {
+                    b[ga] += f.1[la];
+                    for &(lb, gb) in &local {
+                        a[ga * p + gb] += f.0[la * m + lb];
+                    }
+                }
+            }
+        }
+        for (i, &c) in cols.iter().enumerate() {
+            a[i * p + i] += 1e-9 * a[i * p + i] + 1e-300 + problem.columns[c].precision;
+        }
+        solve_spd(&a, &b, p).expect("normal equations positive definite")
+    }
+
     fn first_candidate(problem: &EffortProblem<'_>, row: usize, kind: EffectKind) -> usize {
         (0..problem.candidates.len()).find(|&c| problem.candidates[c].row == row && problem.candidates[c].kind == kind).expect("candidate")
     }
@@ -2494,8 +2659,8 @@ mod tests {
         for (set, blocks) in [(&coupled[..], 1), (&apart[..], 2)] {
             let cols = problem.columns_of(set);
             assert_eq!(problem.blocks_of(&cols).len(), blocks, "{set:?}");
-            // One solve over every column at once, the whole Gram matrix assembled.
-            let joint_solve = |skip: Option<usize>| problem.solve(&cols, &problem.local_maps(&cols), skip);
+            // One solve over every column at once, the whole Gram matrix assembled from the rows'.
+            let joint_solve = |skip: Option<usize>| assembled_solve(&problem, &cols, skip);
             let got = problem.evaluate(set);
             for (k, without) in got.theta_without.iter().enumerate() {
                 let want = joint_solve(Some(k));
