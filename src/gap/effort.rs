@@ -1441,12 +1441,15 @@ impl EffortProblem<'_> {
                 let g = &self.grams[r];
                 let (gram, cr, rr, _) = &g.folds[fold];
                 let m = g.columns.len();
+                // The row's parameters beside their Gram indices, then r·r − 2 θ·c + θᵀ G θ in
+                // the order of the row's columns.
+                let local: Vec<(usize, f64)> = maps[r].iter().map(|&(la, ga)| (la, theta[ga])).collect();
                 let mut sse = *rr;
-                for &(la, ga) in &maps[r] {
-                    let ta = theta[ga];
+                for &(la, ta) in &local {
                     sse -= 2.0 * ta * cr[la];
-                    for &(lb, gb) in &maps[r] {
-                        sse += ta * theta[gb] * gram[la * m + lb];
+                    let gram_row = &gram[la * m..(la + 1) * m];
+                    for &(lb, tb) in &local {
+                        sse += ta * tb * gram_row[lb];
                     }
                 }
                 row_sse[fold] = sse.max(0.0);
