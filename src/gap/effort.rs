@@ -517,31 +517,33 @@ impl NormalSums {
         Self { rows_of, place, row_grams, multi, rhs }
     }
 
-    /// The normal equations (p × p row-major, and p) of the columns `cols` over the folds other
-    /// than `skip` (None: all).
-    fn normal_equations(&self, cols: &[usize], skip: Option<usize>) -> (Vec<f64>, Vec<f64>) {
+    /// The normal equations (p × p row-major, and p) of the columns `cols`, per fold left out
+    /// (then over all folds: the last).
+    fn normal_equations(&self, cols: &[usize]) -> Vec<(Vec<f64>, Vec<f64>)> {
         let p = cols.len();
-        let s = skip.unwrap_or(self.rhs.len().saturating_sub(1));
-        let mut a = vec![0.0; p * p];
-        let b: Vec<f64> = cols.iter().map(|&c| self.rhs.get(s).and_then(|r| r.get(c)).copied().unwrap_or(0.0)).collect();
+        let mut systems: Vec<(Vec<f64>, Vec<f64>)> =
+            self.rhs.iter().map(|rhs| (vec![0.0; p * p], cols.iter().map(|&c| rhs.get(c).copied().unwrap_or(0.0)).collect())).collect();
         // Every sum is symmetric to the bit (the rows' Gram matrices are mirrored copies, and
         // both halves are added in one order): the lower half is filled, then mirrored.
         for (i, &ci) in cols.iter().enumerate() {
             for (j, &cj) in cols.iter().enumerate().take(i + 1) {
-                let v = match (self.place[ci], self.place[cj]) {
+                let per_skip = |s: usize| match (self.place[ci], self.place[cj]) {
                     (SumPlace::Multi(u), _) => self.multi[u][s][cj],
                     (_, SumPlace::Multi(u)) => self.multi[u][s][ci],
                     (SumPlace::Row(ri, li), SumPlace::Row(rj, lj)) if ri == rj => {
-                        let (m, per_skip) = &self.row_grams[ri];
-                        per_skip[s][li * m + lj]
+                        let (m, sums) = &self.row_grams[ri];
+                        sums[s][li * m + lj]
                     }
                     _ => 0.0,
                 };
-                a[i * p + j] = v;
-                a[j * p + i] = v;
+                for (s, (a, _)) in systems.iter_mut().enumerate() {
+                    let v = per_skip(s);
+                    a[i * p + j] = v;
+                    a[j * p + i] = v;
+                }
             }
         }
-        (a, b)
+        systems
     }
 }
 
@@ -1407,10 +1409,9 @@ impl EffortProblem<'_> {
         maps
     }
 
-    /// Weighted least squares of the columns `cols` (sorted) on the folds other than `skip`
-    /// (None: all), their normal equations picked from [`NormalSums`].
-    fn solve(&self, cols: &[usize], skip: Option<usize>) -> Vec<f64> {
-        let (mut a, b) = self.sums.normal_equations(cols, skip);
+    /// Weighted least squares of the columns `cols` (sorted) with their normal equations
+    /// `(a, b)` ([`NormalSums::normal_equations`]).
+    fn solve(&self, cols: &[usize], (mut a, b): (Vec<f64>, Vec<f64>)) -> Vec<f64> {
         let p = cols.len();
         // A whisper of ridge keeps exactly collinear columns (look-alike kinds) solvable; the
         // model's own error has its prior.
@@ -1435,8 +1436,10 @@ impl EffortProblem<'_> {
         let touched: Vec<usize> = (0..self.rows.len()).filter(|&r| !maps[r].is_empty()).collect();
         let mut fold_sse = vec![vec![0.0; k]; touched.len()];
         let mut theta_without = Vec::with_capacity(k);
-        for fold in 0..k {
-            let theta = self.solve(cols, Some(fold));
+        // One system per fold left out, then the one over all folds.
+        let mut systems = self.sums.normal_equations(cols).into_iter();
+        for (fold, system) in (0..k).zip(systems.by_ref()) {
+            let theta = self.solve(cols, system);
             for (row_sse, &r) in fold_sse.iter_mut().zip(&touched) {
                 let g = &self.grams[r];
                 let (gram, cr, rr, _) = &g.folds[fold];
@@ -1456,7 +1459,8 @@ impl EffortProblem<'_> {
             }
             theta_without.push(theta);
         }
-        BlockFit { rows: touched, fold_sse, theta: self.solve(cols, None), theta_without }
+        let theta = systems.next().map_or_else(|| vec![0.0; cols.len()], |system| self.solve(cols, system));
+        BlockFit { rows: touched, fold_sse, theta, theta_without }
     }
 
     fn evaluate(&self, set: &[usize]) -> Evaluation {
