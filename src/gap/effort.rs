@@ -455,57 +455,18 @@ impl NormalSums {
                 }
             })
             .collect();
-        let row_grams = grams
-            .iter()
-            .map(|g| {
-                let m = g.columns.len();
-                let per_skip = (0..=folds)
-                    .map(|skip| {
-                        let mut sum = vec![0.0; m * m];
-                        for (_, f) in g.folds.iter().enumerate().filter(|(k, _)| *k != skip) {
-                            sum.iter_mut().zip(&f.0).for_each(|(s, v)| *s += v);
-                        }
-                        sum
-                    })
-                    .collect();
-                (m, per_skip)
-            })
-            .collect();
-        let multi = (0..columns)
-            .filter(|&c| matches!(place[c], SumPlace::Multi(_)))
-            .map(|u| {
-                let mut per_skip = vec![vec![0.0; columns]; folds + 1];
-                for c in 0..columns {
-                    // The rows both columns are on, ascending, with `u`'s index there and `c`'s.
-                    let shared: Vec<(usize, usize, usize)> = rows_of[u]
-                        .iter()
-                        .filter_map(|&(r, lu)| rows_of[c].iter().find(|(rc, _)| *rc == r).map(|&(_, lc)| (r, lu, lc)))
-                        .collect();
-                    if shared.is_empty() {
-                        continue;
-                    }
-                    for (skip, sums) in per_skip.iter_mut().enumerate() {
-                        let mut total = 0.0;
-                        for &(r, lu, lc) in &shared {
-                            let m = grams[r].columns.len();
-                            for (_, f) in grams[r].folds.iter().enumerate().filter(|(k, _)| *k != skip) {
-                                total += f.0[lu * m + lc];
-                            }
-                        }
-                        sums[c] = total;
-                    }
-                }
-                per_skip
-            })
-            .collect();
-        // Sums in the assembly's order: rows ascending, then folds other than the one left out.
+        let multi =
+            (0..columns).filter(|&c| matches!(place[c], SumPlace::Multi(_))).map(|u| Self::multi_sums(grams, &rows_of, u, folds)).collect();
+        let row_grams = grams.iter().map(|g| (g.columns.len(), (0..=folds).map(|skip| Self::row_sum(g, skip)).collect())).collect();
+        // Rows ascending, then folds other than the one left out, as the assembly adds them.
         let rhs = (0..=folds)
             .map(|skip| {
-                (0..columns)
-                    .map(|c| {
+                rows_of
+                    .iter()
+                    .map(|rows| {
                         let mut total = 0.0;
-                        for &(r, la) in &rows_of[c] {
-                            for (_, f) in grams[r].folds.iter().enumerate().filter(|(k, _)| *k != skip) {
+                        for &(r, la) in rows {
+                            for f in other_folds(&grams[r], skip) {
                                 total += f.1[la];
                             }
                         }
@@ -515,6 +476,41 @@ impl NormalSums {
             })
             .collect();
         Self { rows_of, place, row_grams, multi, rhs }
+    }
+
+    /// Row `g`'s Gram matrix summed over its folds other than `skip`.
+    fn row_sum(g: &RowGram, skip: usize) -> Vec<f64> {
+        let m = g.columns.len();
+        let mut sum = vec![0.0; m * m];
+        for f in other_folds(g, skip) {
+            sum.iter_mut().zip(&f.0).for_each(|(s, v)| *s += v);
+        }
+        sum
+    }
+
+    /// Column `u`'s sums with every column, per fold left out (then none): over the rows both are
+    /// on, ascending, then the folds.
+    fn multi_sums(grams: &[RowGram], rows_of: &[Vec<(usize, usize)>], u: usize, folds: usize) -> Vec<Vec<f64>> {
+        let mut per_skip = vec![vec![0.0; rows_of.len()]; folds + 1];
+        for (c, rows_c) in rows_of.iter().enumerate() {
+            // The rows both columns are on, with `u`'s index there and `c`'s.
+            let shared: Vec<(usize, usize, usize)> =
+                rows_of[u].iter().filter_map(|&(r, lu)| rows_c.iter().find(|(rc, _)| *rc == r).map(|&(_, lc)| (r, lu, lc))).collect();
+            if shared.is_empty() {
+                continue;
+            }
+            for (skip, sums) in per_skip.iter_mut().enumerate() {
+                let mut total = 0.0;
+                for &(r, lu, lc) in &shared {
+                    let m = grams[r].columns.len();
+                    for f in other_folds(&grams[r], skip) {
+                        total += f.0[lu * m + lc];
+                    }
+                }
+                sums[c] = total;
+            }
+        }
+        per_skip
     }
 
     /// The normal equations (p × p row-major, and p) of the columns `cols`, per fold left out
@@ -545,6 +541,11 @@ impl NormalSums {
         }
         systems
     }
+}
+
+/// Row `g`'s folds other than `skip`, in order.
+fn other_folds(g: &RowGram, skip: usize) -> impl Iterator<Item = &(Vec<f64>, Vec<f64>, f64, usize)> {
+    g.folds.iter().enumerate().filter(move |(k, _)| *k != skip).map(|(_, f)| f)
 }
 
 /// One identified joint (an effort row).
