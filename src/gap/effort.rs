@@ -523,19 +523,19 @@ impl NormalSums {
         // both halves are added in one order): the lower half is filled, then mirrored.
         for (i, &ci) in cols.iter().enumerate() {
             for (j, &cj) in cols.iter().enumerate().take(i + 1) {
-                let per_skip = |s: usize| match (self.place[ci], self.place[cj]) {
-                    (SumPlace::Multi(u), _) => self.multi[u][s][cj],
-                    (_, SumPlace::Multi(u)) => self.multi[u][s][ci],
+                // The pair's sums per fold left out, and the entry there; none: they never meet.
+                let (per_skip, at) = match (self.place[ci], self.place[cj]) {
+                    (SumPlace::Multi(u), _) => (&self.multi[u], cj),
+                    (_, SumPlace::Multi(u)) => (&self.multi[u], ci),
                     (SumPlace::Row(ri, li), SumPlace::Row(rj, lj)) if ri == rj => {
                         let (m, sums) = &self.row_grams[ri];
-                        sums[s][li * m + lj]
+                        (sums, li * m + lj)
                     }
-                    _ => 0.0,
+                    _ => continue,
                 };
-                for (s, (a, _)) in systems.iter_mut().enumerate() {
-                    let v = per_skip(s);
-                    a[i * p + j] = v;
-                    a[j * p + i] = v;
+                for ((a, _), sums) in systems.iter_mut().zip(per_skip) {
+                    a[i * p + j] = sums[at];
+                    a[j * p + i] = sums[at];
                 }
             }
         }
@@ -2617,7 +2617,6 @@ mod tests {
         EffortProblem::new(model, &sig, gravity, &rows, &excluded, &vec![true; time_s.len()], rules).expect("problem")
     }
 
-    /// The first candidate of `kind` on effort row `row`.
     /// [`EffortProblem::solve`] with its normal equations added up afresh from the rows' Gram
     /// matrices (rows ascending, then folds), not picked from [`NormalSums`].
     fn assembled_solve(problem: &EffortProblem<'_>, cols: &[usize], skip: Option<usize>) -> Vec<f64> {
@@ -2643,6 +2642,7 @@ mod tests {
         solve_spd(&a, &b, p).expect("normal equations positive definite")
     }
 
+    /// The first candidate of `kind` on effort row `row`.
     fn first_candidate(problem: &EffortProblem<'_>, row: usize, kind: EffectKind) -> usize {
         (0..problem.candidates.len()).find(|&c| problem.candidates[c].row == row && problem.candidates[c].kind == kind).expect("candidate")
     }
