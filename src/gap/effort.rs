@@ -714,6 +714,38 @@ pub struct EffortProblem<'a> {
 /// A term's size, by candidate and its parameters' bits, and the replaced term's, if any.
 type ChangeKey = (usize, Vec<u64>, Option<(usize, Vec<u64>)>);
 
+/// Fitted parameters by column id; a column outside the fit holds 0 (no term). Dense rather
+/// than a map: forward selection builds nine of these (every fold left out, and all) for every
+/// candidate set it weighs, and a map's inserts and frees were a tenth of a chain's analysis.
+#[derive(Debug, Clone, PartialEq)]
+struct Params(Vec<f64>);
+
+impl Params {
+    /// All `columns` parameters 0.
+    fn zeros(columns: usize) -> Self {
+        Self(vec![0.0; columns])
+    }
+
+    /// Column `col`'s parameter (0 outside the fit).
+    fn get(&self, col: usize) -> f64 {
+        self.0.get(col).copied().unwrap_or(0.0)
+    }
+
+    /// Sets the parameters of the columns `cols` to `values`, in order.
+    fn set(&mut self, cols: &[usize], values: &[f64]) {
+        for (&c, &v) in cols.iter().zip(values) {
+            self.0[c] = v;
+        }
+    }
+}
+
+impl std::ops::Index<&usize> for Params {
+    type Output = f64;
+    fn index(&self, col: &usize) -> &f64 {
+        &self.0[*col]
+    }
+}
+
 /// What one block of columns fits ([`EffortProblem::fit_block`]).
 #[derive(Debug)]
 struct BlockFit {
@@ -1340,9 +1372,9 @@ struct Evaluation {
     /// Held-out weighted squared error per row and fold.
     fold_sse: Vec<Vec<f64>>,
     /// Parameters fitted on all folds, per column id.
-    theta: BTreeMap<usize, f64>,
+    theta: Params,
     /// Parameters fitted without each fold (jackknife), per column id.
-    theta_without: Vec<BTreeMap<usize, f64>>,
+    theta_without: Vec<Params>,
 }
 
 impl Evaluation {
@@ -1469,16 +1501,16 @@ impl EffortProblem<'_> {
         let k = self.rules.folds.max(2);
         // A row no column touches keeps the residual of the model as written.
         let mut fold_sse: Vec<Vec<f64>> = self.grams.iter().map(|g| g.folds.iter().map(|f| f.2.max(0.0)).collect()).collect();
-        let mut theta = BTreeMap::new();
-        let mut theta_without = vec![BTreeMap::new(); k];
+        let mut theta = Params::zeros(self.columns.len());
+        let mut theta_without = vec![theta.clone(); k];
         for block in self.blocks_of(&cols) {
             let fit = self.fit_block(&block);
             for (&r, sse) in fit.rows.iter().zip(&fit.fold_sse) {
                 fold_sse[r].clone_from(sse);
             }
-            theta.extend(block.iter().copied().zip(fit.theta.iter().copied()));
+            theta.set(&block, &fit.theta);
             for (all, without) in theta_without.iter_mut().zip(&fit.theta_without) {
-                all.extend(block.iter().copied().zip(without.iter().copied()));
+                all.set(&block, without);
             }
         }
         Evaluation { fold_sse, theta, theta_without }
@@ -1496,14 +1528,14 @@ impl EffortProblem<'_> {
     }
 
     /// RMS effort of candidate c's term on its own row under `theta`, in the motion's description.
-    fn term_rms(&self, c: usize, theta: &BTreeMap<usize, f64>) -> f64 {
+    fn term_rms(&self, c: usize, theta: &Params) -> f64 {
         self.change_rms(c, theta, None)
     }
 
     /// Candidate c's term under `theta` in the motion's description: its columns' values, each
     /// with its parameter.
-    fn term_parts<'s>(&'s self, c: usize, theta: &BTreeMap<usize, f64>) -> Vec<(f64, &'s [f64])> {
-        self.candidates[c].columns.iter().map(|col| (theta.get(col).copied().unwrap_or(0.0), self.columns[*col].size.as_slice())).collect()
+    fn term_parts<'s>(&'s self, c: usize, theta: &Params) -> Vec<(f64, &'s [f64])> {
+        self.candidates[c].columns.iter().map(|col| (theta.get(*col), self.columns[*col].size.as_slice())).collect()
     }
 
     /// RMS of what candidate c under `theta` changes on its row: its whole term, or, where it
@@ -1511,7 +1543,7 @@ impl EffortProblem<'_> {
     /// (a Stribeck law in place of a Coulomb one changes only the break-away).
     /// Remembered by the parameters' bits: forward selection asks for the same terms under the
     /// same fits round after round (a joint's candidates while another joint's term enters).
-    fn change_rms(&self, c: usize, theta: &BTreeMap<usize, f64>, replaced: Option<(usize, &BTreeMap<usize, f64>)>) -> f64 {
+    fn change_rms(&self, c: usize, theta: &Params, replaced: Option<(usize, &Params)>) -> f64 {
         let row = self.candidates[c].row;
         let n = self.rows[row].residual.len();
         let at = |parts: &[(f64, &[f64])], i: usize| parts.iter().map(|(k, v)| k * v[i]).sum::<f64>();
@@ -1664,7 +1696,7 @@ impl EffortProblem<'_> {
 
     /// Whether the fitted parameters of candidate c are physical (a heavier part within the
     /// plausible range, non-negative friction and damping levels).
-    fn plausible(&self, c: usize, theta: &BTreeMap<usize, f64>) -> bool {
+    fn plausible(&self, c: usize, theta: &Params) -> bool {
         if self.candidates[c].unresolved.is_some() {
             return false;
         }
@@ -1746,7 +1778,7 @@ impl EffortProblem<'_> {
 
     /// How far refinement c departs from its base law under `theta`: Stribeck's break-away over
     /// its sliding level, an asymmetric Coulomb law's reverse level over its forward one.
-    fn refinement_excess(&self, c: usize, theta: &BTreeMap<usize, f64>) -> f64 {
+    fn refinement_excess(&self, c: usize, theta: &Params) -> f64 {
         let p = self.effect_of(c, theta).params;
         match self.candidates[c].kind {
             EffectKind::StribeckFriction => p[1] - p[0],
@@ -2098,9 +2130,9 @@ impl EffortProblem<'_> {
     }
 
     /// The effect of candidate c with parameters from `theta` (effort-mode layout).
-    fn effect_of(&self, c: usize, theta: &BTreeMap<usize, f64>) -> Effect {
+    fn effect_of(&self, c: usize, theta: &Params) -> Effect {
         let cand = &self.candidates[c];
-        let t: Vec<f64> = cand.columns.iter().map(|col| theta.get(col).copied().unwrap_or(0.0)).collect();
+        let t: Vec<f64> = cand.columns.iter().map(|col| theta.get(*col)).collect();
         let params = match cand.kind {
             EffectKind::CoulombFriction if cand.asymmetric => vec![t[0], cand.hyper[0], t[1]],
             EffectKind::CoulombFriction => vec![t[0], cand.hyper[0], f64::NAN],
@@ -2290,17 +2322,17 @@ impl EffortProblem<'_> {
     }
 
     /// The first-moment changes `theta` fits for the bodies row r owns, by body.
-    fn first_moments_of(&self, r: usize, theta: &BTreeMap<usize, f64>) -> Vec<(usize, DVec3)> {
+    fn first_moments_of(&self, r: usize, theta: &Params) -> Vec<(usize, DVec3)> {
         let mut out: BTreeMap<usize, DVec3> = BTreeMap::new();
         for (c, &(b, axis, owner)) in &self.nuisance {
             if owner == r {
-                out.entry(b).or_default()[axis] += theta.get(c).copied().unwrap_or(0.0);
+                out.entry(b).or_default()[axis] += theta.get(*c);
             }
         }
         out.into_iter().collect()
     }
 
-    fn residual_after(&self, r: usize, chosen: &[usize], theta: &BTreeMap<usize, f64>) -> Vec<f64> {
+    fn residual_after(&self, r: usize, chosen: &[usize], theta: &Params) -> Vec<f64> {
         let cols: Vec<usize> = self.columns_of(chosen).into_iter().filter(|c| self.columns[*c].rows.contains_key(&r)).collect();
         self.rows[r]
             .residual
@@ -2359,7 +2391,7 @@ impl EffortProblem<'_> {
     /// law's reason.
     fn explain_rejections(&self, chosen: &[usize], fitted: &Evaluation, findings: &mut [JointFinding]) {
         let mut best: BTreeMap<(usize, EffectKind), (Verdict, usize)> = BTreeMap::new();
-        let mut refinements: BTreeMap<usize, (Verdict, usize, BTreeMap<usize, f64>)> = BTreeMap::new();
+        let mut refinements: BTreeMap<usize, (Verdict, usize, Params)> = BTreeMap::new();
         for c in 0..self.candidates.len() {
             let cand = &self.candidates[c];
             if chosen.iter().any(|&x| self.candidates[x].row == cand.row && self.candidates[x].kind == cand.kind) {
