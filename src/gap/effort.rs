@@ -2663,16 +2663,11 @@ mod tests {
     /// analysed with `model`, its efforts those of the tree `truth` with Coulomb friction 0.3 on
     /// both joints.
     fn two_link_problem<'m>(model: &'m GapModel, truth: &MultiBody, rules: SelectionRules) -> EffortProblem<'m> {
-        two_link_problem_damped(model, truth, rules, 0.0)
+        two_link_problem_noisy(model, truth, rules, 0.0, 0.0)
     }
 
-    /// [`two_link_problem`] with viscous damping `damping` on both joints besides the friction.
-    fn two_link_problem_damped<'m>(model: &'m GapModel, truth: &MultiBody, rules: SelectionRules, damping: f64) -> EffortProblem<'m> {
-        two_link_problem_noisy(model, truth, rules, damping, 0.0)
-    }
-
-    /// [`two_link_problem_damped`] with seeded white noise of `noise_sd` N·m on both efforts (a
-    /// torque sensor's).
+    /// [`two_link_problem`] with viscous damping `damping` on both joints besides the friction,
+    /// and seeded white noise of `noise_sd` N·m on both efforts (a torque sensor's).
     fn two_link_problem_noisy<'m>(
         model: &'m GapModel,
         truth: &MultiBody,
@@ -2819,14 +2814,13 @@ mod tests {
         );
     }
 
-    /// What [`EffortProblem::physical_reading`] keeps of Coulomb friction on both joints and
-    /// damping on the elbow, the arm's efforts damped by `damping`: the kinds kept on the elbow,
-    /// and the share of a damping dropped as immaterial.
-    fn check_material(damping: f64, kept: &[EffectKind], dropped_share_under: Option<f64>) {
+    /// `check` of the two-link arm's problem (efforts damped by `damping`, white noise of
+    /// `noise_sd` N·m) and the terms Coulomb friction on both joints and damping on the elbow.
+    fn with_friction_and_elbow_damping<T>(damping: f64, noise_sd: f64, check: impl FnOnce(&EffortProblem<'_>, Terms) -> T) -> T {
         let model = two_link_model();
         let (tree, _) = model.multibody().expect("tree");
         let rules = SelectionRules { first_moment_tolerance: 0.0, ..SelectionRules::default() };
-        let problem = two_link_problem_damped(&model, &tree, rules, damping);
+        let problem = two_link_problem_noisy(&model, &tree, rules, damping, noise_sd);
         let first_of = |row: usize, kind: EffectKind| first_candidate(&problem, row, kind);
         let mut set = vec![
             first_of(0, EffectKind::CoulombFriction),
@@ -2834,7 +2828,18 @@ mod tests {
             first_of(1, EffectKind::ViscousDamping),
         ];
         set.sort_unstable();
-        let (reading, dropped) = problem.physical_reading(&Terms(set));
+        check(&problem, Terms(set))
+    }
+
+    /// What [`EffortProblem::physical_reading`] keeps of Coulomb friction on both joints and
+    /// damping on the elbow, the arm's efforts damped by `damping`: the kinds kept on the elbow,
+    /// and the share of a damping dropped as immaterial.
+    fn check_material(damping: f64, kept: &[EffectKind], dropped_share_under: Option<f64>) {
+        with_friction_and_elbow_damping(damping, 0.0, |problem, set| check_material_of(problem, set, damping, kept, dropped_share_under));
+    }
+
+    fn check_material_of(problem: &EffortProblem<'_>, set: Terms, damping: f64, kept: &[EffectKind], dropped_share_under: Option<f64>) {
+        let (reading, dropped) = problem.physical_reading(&set);
         let elbow: Vec<EffectKind> =
             reading.0.iter().filter(|&&c| problem.candidates[c].row == 1).map(|&c| problem.candidates[c].kind).collect();
         assert_eq!(elbow, kept, "damping {damping}: dropped {dropped:?}");
@@ -2851,18 +2856,7 @@ mod tests {
     /// [`EffortProblem::unresolved_terms`] for an arm damped by `damping` whose efforts carry
     /// white noise of `noise_sd`.
     fn check_resolved(damping: f64, noise_sd: f64, unresolved: bool) {
-        let model = two_link_model();
-        let (tree, _) = model.multibody().expect("tree");
-        let rules = SelectionRules { first_moment_tolerance: 0.0, ..SelectionRules::default() };
-        let problem = two_link_problem_noisy(&model, &tree, rules, damping, noise_sd);
-        let first_of = |row: usize, kind: EffectKind| first_candidate(&problem, row, kind);
-        let mut set = vec![
-            first_of(0, EffectKind::CoulombFriction),
-            first_of(1, EffectKind::CoulombFriction),
-            first_of(1, EffectKind::ViscousDamping),
-        ];
-        set.sort_unstable();
-        let found = problem.unresolved_terms(&Terms(set));
+        let found = with_friction_and_elbow_damping(damping, noise_sd, |problem, set| problem.unresolved_terms(&set));
         let elbow_damping = found.iter().find(|(r, kind, _, _)| *r == 1 && *kind == EffectKind::ViscousDamping);
         assert_eq!(elbow_damping.is_some(), unresolved, "damping {damping}, noise {noise_sd}: {found:?}");
         // Friction far above the noise is resolved either way.

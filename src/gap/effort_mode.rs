@@ -316,6 +316,18 @@ fn identify_at<'a>(
     Some(Identified { band, sig, rows, problem, terms, train, stops, findings, train_findings, overruled: Vec::new() })
 }
 
+/// A training reading without one term, replayed ([`HeldOutReplay::replay_without`]).
+struct WithoutTerm {
+    terms: Terms,
+    findings: Vec<JointFinding>,
+    /// Its held-out replay.
+    held: Vec<Vec<f64>>,
+    /// The joint's held-out replay error (relative to the model as written) with the term and
+    /// without it.
+    with_it: f64,
+    without_it: f64,
+}
+
 /// What a chain's held-out replay is judged against: the recording, the tree, and the replay of
 /// the model as written from the same states.
 struct HeldOutReplay<'a> {
@@ -348,6 +360,25 @@ impl HeldOutReplay<'_> {
     /// relative to that of the model as written over the same samples; infinite when the replay
     /// leaves the finite numbers where the recording and the model as written do not (an
     /// unstable law); NaN when no dof can be judged.
+    /// Row r's term of `kind` taken out of the training reading `(problem, terms)` and the
+    /// held-out part replayed without it (`at`: the stops, signals and piece length the replays
+    /// use): the reading without it, its findings and replay, and the joint's (chain dof d)
+    /// replay error with it (its replay `held`) and without. None where the reading holds no
+    /// such term.
+    fn replay_without(
+        &self,
+        (problem, terms): (&EffortProblem<'_>, &Terms),
+        (stops, sig, horizon_s): (&[Vec<FoundStop>], &Signals, f64),
+        held: &[Vec<f64>],
+        (r, d, kind): (usize, usize, EffectKind),
+    ) -> Option<WithoutTerm> {
+        let terms = problem.without(terms, r, kind)?;
+        let findings = findings_with_stops(problem, &terms, stops);
+        let replayed = self.replay(&findings, sig, horizon_s);
+        let (with_it, without_it) = (self.score(held, &[d]), self.score(&replayed, &[d]));
+        Some(WithoutTerm { terms, findings, held: replayed, with_it, without_it })
+    }
+
     fn score(&self, replayed: &[Vec<f64>], dofs: &[usize]) -> f64 {
         let mut ratios = Vec::new();
         for &d in dofs {
@@ -536,16 +567,13 @@ fn drop_what_the_motion_does_not_show(
             train_problem.rigid_body_shaped(train_terms, r).into_iter().map(|k| (train_findings[r].effect_rms_of(k), k)).collect();
         kinds.sort_by(|a, b| a.0.total_cmp(&b.0));
         for (_, kind) in kinds {
-            let Some(without) = train_problem.without(train_terms, r, kind) else { continue };
-            let findings_without = findings_with_stops(train_problem, &without, &found.stops);
-            let replayed = replay.replay(&findings_without, &found.sig, horizon_s);
-            let (with_it, without_it) = (replay.score(&held, &[d]), replay.score(&replayed, &[d]));
+            let at = (&found.stops[..], &found.sig, horizon_s);
+            let Some(w) = replay.replay_without((train_problem, train_terms), at, &held, (r, d, kind)) else { continue };
+            let (with_it, without_it) = (w.with_it, w.without_it);
             if shows_in_motion(rules, with_it, without_it) {
                 continue;
             }
-            held = replayed;
-            *train_terms = without;
-            *train_findings = findings_without;
+            (held, *train_terms, *train_findings) = (w.held, w.terms, w.findings);
             if let Some(whole) = found.problem.without(&found.terms, r, kind) {
                 found.findings = findings_with_stops(&found.problem, &whole, &found.stops);
                 found.terms = whole;
@@ -661,18 +689,14 @@ fn drop_unresolved(
     let mut dropped = false;
     for (r, kind, level, sd) in unresolved {
         let Some(d) = replay.chain_dof(found.rows[r]) else { continue };
+        let at = (&found.stops[..], &found.sig, horizon_s);
         let mut tested = None;
-        if let Some(without) = train_problem.without(train_terms, r, kind) {
-            let findings_without = findings_with_stops(train_problem, &without, &found.stops);
-            let replayed = replay.replay(&findings_without, &found.sig, horizon_s);
-            let (with_it, without_it) = (replay.score(&held, &[d]), replay.score(&replayed, &[d]));
-            if shows_in_motion(rules, with_it, without_it) {
+        if let Some(w) = replay.replay_without((train_problem, train_terms), at, &held, (r, d, kind)) {
+            if shows_in_motion(rules, w.with_it, w.without_it) {
                 continue;
             }
-            held = replayed;
-            *train_terms = without;
-            *train_findings = findings_without;
-            tested = Some((with_it, without_it));
+            tested = Some((w.with_it, w.without_it));
+            (held, *train_terms, *train_findings) = (w.held, w.terms, w.findings);
         }
         if let Some(whole) = found.problem.without(&found.terms, r, kind) {
             found.terms = whole;
