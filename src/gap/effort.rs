@@ -2816,7 +2816,7 @@ mod tests {
 
     /// `check` of the two-link arm's problem (efforts damped by `damping`, white noise of
     /// `noise_sd` N·m) and the terms Coulomb friction on both joints and damping on the elbow.
-    fn with_friction_and_elbow_damping<T>(damping: f64, noise_sd: f64, check: impl FnOnce(&EffortProblem<'_>, Terms) -> T) -> T {
+    fn with_friction_and_elbow_damping<T>(damping: f64, noise_sd: f64, check: impl FnOnce(&EffortProblem<'_>, &Terms) -> T) -> T {
         let model = two_link_model();
         let (tree, _) = model.multibody().expect("tree");
         let rules = SelectionRules { first_moment_tolerance: 0.0, ..SelectionRules::default() };
@@ -2828,7 +2828,7 @@ mod tests {
             first_of(1, EffectKind::ViscousDamping),
         ];
         set.sort_unstable();
-        check(&problem, Terms(set))
+        check(&problem, &Terms(set))
     }
 
     /// What [`EffortProblem::physical_reading`] keeps of Coulomb friction on both joints and
@@ -2838,8 +2838,8 @@ mod tests {
         with_friction_and_elbow_damping(damping, 0.0, |problem, set| check_material_of(problem, set, damping, kept, dropped_share_under));
     }
 
-    fn check_material_of(problem: &EffortProblem<'_>, set: Terms, damping: f64, kept: &[EffectKind], dropped_share_under: Option<f64>) {
-        let (reading, dropped) = problem.physical_reading(&set);
+    fn check_material_of(problem: &EffortProblem<'_>, set: &Terms, damping: f64, kept: &[EffectKind], dropped_share_under: Option<f64>) {
+        let (reading, dropped) = problem.physical_reading(set);
         let elbow: Vec<EffectKind> =
             reading.0.iter().filter(|&&c| problem.candidates[c].row == 1).map(|&c| problem.candidates[c].kind).collect();
         assert_eq!(elbow, kept, "damping {damping}: dropped {dropped:?}");
@@ -2856,7 +2856,7 @@ mod tests {
     /// [`EffortProblem::unresolved_terms`] for an arm damped by `damping` whose efforts carry
     /// white noise of `noise_sd`.
     fn check_resolved(damping: f64, noise_sd: f64, unresolved: bool) {
-        let found = with_friction_and_elbow_damping(damping, noise_sd, |problem, set| problem.unresolved_terms(&set));
+        let found = with_friction_and_elbow_damping(damping, noise_sd, |problem, set| problem.unresolved_terms(set));
         let elbow_damping = found.iter().find(|(r, kind, _, _)| *r == 1 && *kind == EffectKind::ViscousDamping);
         assert_eq!(elbow_damping.is_some(), unresolved, "damping {damping}, noise {noise_sd}: {found:?}");
         // Friction far above the noise is resolved either way.
