@@ -2856,8 +2856,10 @@ mod tests {
     /// [`EffortProblem::unresolved_terms`] for an arm damped by `damping` whose efforts carry
     /// white noise of `noise_sd`.
     fn check_resolved(damping: f64, noise_sd: f64, unresolved: bool) {
-        let found = with_friction_and_elbow_damping(damping, noise_sd, |problem, set| problem.unresolved_terms(set));
-        let elbow_damping = found.iter().find(|(r, kind, _, _)| *r == 1 && *kind == EffectKind::ViscousDamping);
+        let (elbow_damping, found) = with_friction_and_elbow_damping(damping, noise_sd, |problem, set| {
+            let found = problem.unresolved_terms(set);
+            (found.iter().copied().find(|(r, kind, _, _)| *r == 1 && *kind == EffectKind::ViscousDamping), found)
+        });
         assert_eq!(elbow_damping.is_some(), unresolved, "damping {damping}, noise {noise_sd}: {found:?}");
         // Friction far above the noise is resolved either way.
         assert!(found.iter().all(|(_, kind, _, _)| *kind != EffectKind::CoulombFriction), "{found:?}");
