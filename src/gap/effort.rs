@@ -1102,8 +1102,11 @@ pub fn robust_scale(v: &[f64]) -> f64 {
 /// smooth over 0.05-0.4 rad/s (the Panda's published law, 0.12-0.39 rad/s), as wide as a slow
 /// excitation's speeds; at 0.3× at most, such friction came out as a sharper law plus viscous
 /// damping, or damping alone. Steps of 1.4× at the wide end, where the law's shape shows over the
-/// speeds recorded and a law between two steps leaves a misfit that damping would take up.
-const TRANSITION_GRID: [f64; 9] = [0.002, 0.01, 0.03, 0.1, 0.3, 0.42, 0.6, 0.85, 1.2];
+/// speeds recorded and a law between two steps leaves a misfit that damping would take up; and
+/// no more than 1.8× from 0.03× up, for the same reason: with steps of 3× there, Drake's smooth
+/// friction (0.05 rad/s on an iiwa's joints) was read at 0.5-1.8× its transition on half its
+/// joints, with a false viscous damping beside it on eight.
+const TRANSITION_GRID: [f64; 11] = [0.002, 0.01, 0.03, 0.055, 0.1, 0.17, 0.3, 0.42, 0.6, 0.85, 1.2];
 /// Multipliers of the RMS speed for the Stribeck speeds tried.
 const STRIBECK_GRID: [f64; 3] = [0.05, 0.15, 0.4];
 /// Where a Stribeck law departs from its base law while the joint slides: from this many
