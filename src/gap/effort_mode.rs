@@ -356,10 +356,6 @@ impl HeldOutReplay<'_> {
         replay_pieces(&fitted, &physics, self.input, sig, self.t_split, horizon_s)
     }
 
-    /// Mean over `dofs` of the held-out squared error of `replayed` ([`Self::replay`]), each
-    /// relative to that of the model as written over the same samples; infinite when the replay
-    /// leaves the finite numbers where the recording and the model as written do not (an
-    /// unstable law); NaN when no dof can be judged.
     /// Row r's term of `kind` taken out of the training reading `(problem, terms)` and the
     /// held-out part replayed without it (`at`: the stops, signals and piece length the replays
     /// use): the reading without it, its findings and replay, and the joint's (chain dof d)
@@ -379,6 +375,10 @@ impl HeldOutReplay<'_> {
         Some(WithoutTerm { terms, findings, held: replayed, with_it, without_it })
     }
 
+    /// Mean over `dofs` of the held-out squared error of `replayed` ([`Self::replay`]), each
+    /// relative to that of the model as written over the same samples; infinite when the replay
+    /// leaves the finite numbers where the recording and the model as written do not (an
+    /// unstable law); NaN when no dof can be judged.
     fn score(&self, replayed: &[Vec<f64>], dofs: &[usize]) -> f64 {
         let mut ratios = Vec::new();
         for &d in dofs {
