@@ -672,6 +672,8 @@ fn drop_whole_only_terms(replay: &HeldOutReplay<'_>, found: &mut Identified<'_>,
 /// term of that kind dropped, the others kept) the joint's held-out replay must be worse by
 /// [`SelectionRules::min_cv_gain`]. A term the training reading does not hold was never tested
 /// there, and is dropped. The least material first, each judged beside what is kept so far.
+/// Where no held-out replay can judge (no training reading; a joint outside any chain, whose
+/// levels output error refines) the terms are kept as they are.
 /// `MuJoCo`'s Panda read a damping of 0.046 ± 0.025 N·m·s/rad beside a wrist's dry friction; the
 /// real simple pendulum's rotor inertia, 0.009 ± 0.005 kg·m², is kept: its held-out replay is
 /// 2.5× worse without it.
