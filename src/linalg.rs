@@ -43,6 +43,12 @@ pub fn cholesky_solve(l: &[f64], b: &[f64], n: usize) -> Vec<f64> {
 
 /// [`cholesky_solve`] over `y`, which holds `b` and receives `x`.
 fn cholesky_solve_in_place(l: &[f64], y: &mut [f64], n: usize) {
+    forward_substitute(l, y, n);
+    back_substitute(l, y, n);
+}
+
+/// Solves `L z = b` over `y` (holding `b`, receiving `z`) for a Cholesky factor from [`cholesky`].
+pub fn forward_substitute(l: &[f64], y: &mut [f64], n: usize) {
     for i in 0..n {
         let row = &l[i * n..i * n + i];
         let (before, rest) = y.split_at_mut(i);
@@ -52,6 +58,10 @@ fn cholesky_solve_in_place(l: &[f64], y: &mut [f64], n: usize) {
         }
         rest[0] = v / l[i * n + i];
     }
+}
+
+/// Solves `Lᵀ x = z` over `y` (holding `z`, receiving `x`) for a Cholesky factor from [`cholesky`].
+pub fn back_substitute(l: &[f64], y: &mut [f64], n: usize) {
     for i in (0..n).rev() {
         let mut v = y[i];
         for k in i + 1..n {

@@ -24,7 +24,7 @@ use super::effects::{Effect, EffectKind};
 use super::model::{DofKind, GapModel};
 use super::smooth::{GAUSS_HALF_GAIN_F_SIGMA, GAUSS_SUPPORT_SIGMAS, Smoother, local_cubic};
 use crate::dynamics::MultiBody;
-use crate::linalg::solve_spd;
+use crate::linalg::{back_substitute, cholesky, forward_substitute, solve_spd};
 
 /// The thresholds of selection in effort space, in one place.
 #[derive(Debug, Clone)]
@@ -530,16 +530,7 @@ impl NormalSums {
         // both halves are added in one order): the lower half is filled, then mirrored.
         for (i, &ci) in cols.iter().enumerate() {
             for (j, &cj) in cols.iter().enumerate().take(i + 1) {
-                // The pair's sums per fold left out, and the entry there; none: they never meet.
-                let (per_skip, at) = match (self.place[ci], self.place[cj]) {
-                    (SumPlace::Multi(u), _) => (&self.multi[u], cj),
-                    (_, SumPlace::Multi(u)) => (&self.multi[u], ci),
-                    (SumPlace::Row(ri, li), SumPlace::Row(rj, lj)) if ri == rj => {
-                        let (m, sums) = &self.row_grams[ri];
-                        (sums, li * m + lj)
-                    }
-                    _ => continue,
-                };
+                let Some((per_skip, at)) = self.pair(ci, cj) else { continue };
                 for ((a, _), sums) in systems.iter_mut().zip(per_skip) {
                     a[i * p + j] = sums[at];
                     a[j * p + i] = sums[at];
@@ -547,6 +538,31 @@ impl NormalSums {
             }
         }
         systems
+    }
+
+    /// The sums of columns `ci` and `cj` (`ci` the later in a fit's order) per fold left out
+    /// (then none), and the entry there; None where they never meet.
+    fn pair(&self, ci: usize, cj: usize) -> Option<(&[Vec<f64>], usize)> {
+        match (self.place[ci], self.place[cj]) {
+            (SumPlace::Multi(u), _) => Some((&self.multi[u], cj)),
+            (_, SumPlace::Multi(u)) => Some((&self.multi[u], ci)),
+            (SumPlace::Row(ri, li), SumPlace::Row(rj, lj)) if ri == rj => {
+                let (m, sums) = &self.row_grams[ri];
+                Some((sums, li * m + lj))
+            }
+            _ => None,
+        }
+    }
+
+    /// Entry (`ci`, `cj`) of the normal equations of system `s` ([`Self::normal_equations`]).
+    fn entry(&self, s: usize, ci: usize, cj: usize) -> f64 {
+        let (later, earlier) = if ci >= cj { (ci, cj) } else { (cj, ci) };
+        self.pair(later, earlier).map_or(0.0, |(per_skip, at)| per_skip[s][at])
+    }
+
+    /// Entry `c` of the right-hand side of system `s`.
+    fn rhs_entry(&self, s: usize, c: usize) -> f64 {
+        self.rhs[s].get(c).copied().unwrap_or(0.0)
     }
 }
 
@@ -710,6 +726,11 @@ pub struct EffortProblem<'a> {
     moving: Vec<Vec<bool>>,
     /// Blocks of columns already fitted ([`Self::fit_block`]).
     block_fits: Mutex<HashMap<Vec<usize>, Arc<BlockFit>>>,
+    /// Blocks of columns already factored, for the bordered fits of forward selection
+    /// ([`Self::factored`]).
+    factors: Mutex<HashMap<Vec<usize>, Option<Arc<Factored>>>>,
+    /// Blocks already fitted by extending a base's factors ([`Self::bordered_fit`]).
+    bordered_fits: Mutex<HashMap<BorderedKey, Arc<BlockFit>>>,
     /// Sizes of terms already measured ([`Self::change_rms`]).
     change_sizes: Mutex<HashMap<ChangeKey, f64>>,
     /// The columns of the model's own first-moment error, in every fit ([`super::accuracy`]),
@@ -717,6 +738,9 @@ pub struct EffortProblem<'a> {
     /// nearest identified joint).
     nuisance: BTreeMap<usize, (usize, usize, usize)>,
 }
+
+/// A block fitted by extension: its base's columns, its new columns, the rows it scores.
+type BorderedKey = (Vec<usize>, Vec<usize>, Vec<usize>);
 
 /// A term's size, by candidate and its parameters' bits, and the replaced term's, if any.
 type ChangeKey = (usize, Vec<u64>, Option<(usize, Vec<u64>)>);
@@ -764,6 +788,21 @@ struct BlockFit {
     theta: Vec<f64>,
     /// Parameters fitted without each fold.
     theta_without: Vec<Vec<f64>>,
+}
+
+/// A block of columns' normal equations factored ([`EffortProblem::factored`]).
+#[derive(Debug)]
+struct Factored {
+    /// Per system (every fold left out, then all): the lower Cholesky factor `L` of the ridged
+    /// matrix and `L⁻¹ b`.
+    systems: Vec<(Vec<f64>, Vec<f64>)>,
+}
+
+/// The parameters of `base`'s columns (`theta_b`) and the others' (`theta_c`, in order) in
+/// the order of `cols` (sorted, `base` a sorted part of it).
+fn merged(cols: &[usize], base: &[usize], theta_b: &[f64], theta_c: &[f64]) -> Vec<f64> {
+    let (mut b, mut c) = (theta_b.iter(), theta_c.iter());
+    cols.iter().map(|col| if base.binary_search(col).is_ok() { b.next() } else { c.next() }.copied().unwrap_or(0.0)).collect()
 }
 
 /// Entries kept in each of [`EffortProblem`]'s caches before it starts afresh (a bound on their
@@ -939,6 +978,8 @@ impl<'a> EffortProblem<'a> {
             used,
             moving: Vec::new(),
             block_fits: Mutex::new(HashMap::new()),
+            factors: Mutex::new(HashMap::new()),
+            bordered_fits: Mutex::new(HashMap::new()),
             change_sizes: Mutex::new(HashMap::new()),
             nuisance: BTreeMap::new(),
         };
@@ -1456,12 +1497,16 @@ impl EffortProblem<'_> {
     /// `(a, b)` ([`NormalSums::normal_equations`]).
     fn solve(&self, cols: &[usize], (mut a, b): (Vec<f64>, Vec<f64>)) -> Vec<f64> {
         let p = cols.len();
-        // A whisper of ridge keeps exactly collinear columns (look-alike kinds) solvable; the
-        // model's own error has its prior.
         for (i, &c) in cols.iter().enumerate() {
-            a[i * p + i] += 1e-9 * a[i * p + i] + 1e-300 + self.columns[c].precision;
+            a[i * p + i] = self.ridged(c, a[i * p + i]);
         }
         solve_spd(&a, &b, p).unwrap_or_else(|| vec![0.0; p])
+    }
+
+    /// Column c's diagonal entry `d` of the normal equations with its ridge: a whisper keeps
+    /// exactly collinear columns (look-alike kinds) solvable; the model's own error has its prior.
+    fn ridged(&self, c: usize, d: f64) -> f64 {
+        d + (1e-9 * d + 1e-300 + self.columns[c].precision)
     }
 
     /// One block of columns ([`Self::blocks_of`]) fitted on every fold left out in turn and on
@@ -1474,15 +1519,23 @@ impl EffortProblem<'_> {
 
     /// [`Self::fit_block`] without the cache.
     fn fit_block_afresh(&self, cols: &[usize]) -> BlockFit {
+        // One system per fold left out, then the one over all folds.
+        let thetas = self.sums.normal_equations(cols).into_iter().map(|system| self.solve(cols, system)).collect();
+        self.block_fit_from(cols, thetas, None)
+    }
+
+    /// The block `cols` under its parameters per system (`thetas`: every fold left out, then
+    /// all), with the held-out error of each row it touches; with `only`, of those rows alone
+    /// and without the parameters fitted without each fold (what weighing a candidate needs).
+    fn block_fit_from(&self, cols: &[usize], thetas: Vec<Vec<f64>>, only: Option<&[usize]>) -> BlockFit {
         let k = self.rules.folds.max(2);
         let maps = self.local_maps(cols);
-        let touched: Vec<usize> = (0..self.rows.len()).filter(|&r| !maps[r].is_empty()).collect();
+        let touched: Vec<usize> =
+            (0..self.rows.len()).filter(|&r| !maps[r].is_empty() && only.is_none_or(|rows| rows.contains(&r))).collect();
         let mut fold_sse = vec![vec![0.0; k]; touched.len()];
         let mut theta_without = Vec::with_capacity(k);
-        // One system per fold left out, then the one over all folds.
-        let mut systems = self.sums.normal_equations(cols).into_iter();
-        for (fold, system) in (0..k).zip(systems.by_ref()) {
-            let theta = self.solve(cols, system);
+        let mut systems = thetas.into_iter();
+        for (fold, theta) in (0..k).zip(systems.by_ref()) {
             for (row_sse, &r) in fold_sse.iter_mut().zip(&touched) {
                 let g = &self.grams[r];
                 let (gram, cr, rr, _) = &g.folds[fold];
@@ -1500,21 +1553,136 @@ impl EffortProblem<'_> {
                 }
                 row_sse[fold] = sse.max(0.0);
             }
-            theta_without.push(theta);
+            if only.is_none() {
+                theta_without.push(theta);
+            }
         }
-        let theta = systems.next().map_or_else(|| vec![0.0; cols.len()], |system| self.solve(cols, system));
+        let theta = systems.next().unwrap_or_else(|| vec![0.0; cols.len()]);
         BlockFit { rows: touched, fold_sse, theta, theta_without }
     }
 
+    /// The block `base` (columns sorted) with its normal equations factored, system by system;
+    /// None where one is not positive definite. Remembered: a round of forward selection weighs
+    /// every candidate beside the same chosen terms.
+    fn factored(&self, base: &[usize]) -> Option<Arc<Factored>> {
+        remembered(&self.factors, base.to_vec(), || {
+            let p = base.len();
+            let systems = self
+                .sums
+                .normal_equations(base)
+                .into_iter()
+                .map(|(mut a, mut b)| {
+                    for (i, &c) in base.iter().enumerate() {
+                        a[i * p + i] = self.ridged(c, a[i * p + i]);
+                    }
+                    let l = cholesky(&a, p)?;
+                    forward_substitute(&l, &mut b, p);
+                    Some((l, b))
+                })
+                .collect::<Option<Vec<_>>>()?;
+            Some(Arc::new(Factored { systems }))
+        })
+    }
+
+    /// The block `cols` (sorted) fitted by extending the factors of its columns other than
+    /// `new` (`base`; both sorted), system by system. With B the base's columns and C the new
+    /// ones: `L_B W = A_BC`, the Schur complement `A_CC − WᵀW = L_S L_Sᵀ`, then
+    /// `L_S L_Sᵀ θ_C = b_C − Wᵀ z` and `L_Bᵀ θ_B = z − W θ_C` with `z = L_B⁻¹ b_B`: the least
+    /// squares of [`Self::fit_block_afresh`] (to rounding) at q·p² a system instead of p³.
+    /// Forward selection weighs every candidate (q columns) beside the same chosen terms and the
+    /// model's own accuracy (p columns). The held-out error of the rows `rows` alone, and no
+    /// parameters fitted without each fold ([`Self::block_fit_from`]). None where the extension
+    /// is not positive definite. Remembered by (base, new, rows).
+    fn bordered_fit(&self, cols: &[usize], base: &[usize], new: &[usize], rows: &[usize]) -> Option<Arc<BlockFit>> {
+        let key = (base.to_vec(), new.to_vec(), rows.to_vec());
+        if let Some(hit) = self.bordered_fits.lock().ok().and_then(|c| c.get(&key).cloned()) {
+            return Some(hit);
+        }
+        let factors = self.factored(base)?;
+        let thetas = factors
+            .systems
+            .iter()
+            .enumerate()
+            .map(|(s, (l, z))| self.bordered_solve(s, l, z, base, new).map(|(theta_b, theta_c)| merged(cols, base, &theta_b, &theta_c)))
+            .collect::<Option<Vec<_>>>()?;
+        let fit = Arc::new(self.block_fit_from(cols, thetas, Some(rows)));
+        Some(remembered(&self.bordered_fits, key, || fit))
+    }
+
+    /// System s of [`Self::bordered_fit`]: (`θ_B`, `θ_C`) from the base's factor `l` and `z`.
+    fn bordered_solve(&self, s: usize, l: &[f64], z: &[f64], base: &[usize], new: &[usize]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let (p, q) = (base.len(), new.len());
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        // W, one new column at a time.
+        let w: Vec<Vec<f64>> = new
+            .iter()
+            .map(|&c| {
+                let mut col: Vec<f64> = base.iter().map(|&b| self.sums.entry(s, b, c)).collect();
+                forward_substitute(l, &mut col, p);
+                col
+            })
+            .collect();
+        let mut schur = vec![0.0; q * q];
+        for i in 0..q {
+            for j in 0..=i {
+                let a = self.sums.entry(s, new[i], new[j]);
+                let v = if i == j { self.ridged(new[i], a) } else { a } - dot(&w[i], &w[j]);
+                schur[i * q + j] = v;
+                schur[j * q + i] = v;
+            }
+        }
+        let ls = cholesky(&schur, q)?;
+        let mut theta_c: Vec<f64> = new.iter().zip(&w).map(|(&c, wi)| self.sums.rhs_entry(s, c) - dot(wi, z)).collect();
+        forward_substitute(&ls, &mut theta_c, q);
+        back_substitute(&ls, &mut theta_c, q);
+        let mut theta_b = z.to_vec();
+        for (wi, &t) in w.iter().zip(&theta_c) {
+            for (v, x) in theta_b.iter_mut().zip(wi) {
+                *v -= x * t;
+            }
+        }
+        back_substitute(l, &mut theta_b, p);
+        Some((theta_b, theta_c))
+    }
+
     fn evaluate(&self, set: &[usize]) -> Evaluation {
+        self.evaluate_by(set, true, |block| self.fit_block(block))
+    }
+
+    /// [`Self::evaluate`] of `set` = `chosen` with candidate c ([`Self::with`]) for weighing c
+    /// ([`Self::verdict`]): each block that holds columns of c's that the rest of the set lacks
+    /// is fitted by extending the rest's factors ([`Self::bordered_fit`]), the others as
+    /// `evaluate` does. What weighing needs only: the held-out error of c's rows (the other
+    /// rows of an extended block keep the model's own, unread) and the parameters fitted on all
+    /// folds (none fitted without each fold). The sets forward selection keeps are fitted afresh
+    /// ([`Self::best_step`]), so a kept set's numbers never depend on the path that reached it.
+    fn evaluate_beside(&self, set: &[usize], c: usize) -> Evaluation {
+        let rows = self.rows_of(c);
+        let rest: Vec<usize> = set.iter().copied().filter(|&x| x != c).collect();
+        let rest_cols = self.columns_of(&rest);
+        let mut new: Vec<usize> = self.candidates[c].columns.iter().copied().filter(|col| rest_cols.binary_search(col).is_err()).collect();
+        new.sort_unstable();
+        new.dedup();
+        self.evaluate_by(set, false, |block| {
+            let (block_new, base): (Vec<usize>, Vec<usize>) = block.iter().partition(|col| new.binary_search(col).is_ok());
+            if block_new.is_empty() || base.is_empty() {
+                return self.fit_block(block);
+            }
+            self.bordered_fit(block, &base, &block_new, &rows).unwrap_or_else(|| self.fit_block(block))
+        })
+    }
+
+    /// The held-out errors and parameters of `set`, each of its blocks fitted by `fit`; with
+    /// `jackknife`, the parameters fitted without each fold too.
+    fn evaluate_by(&self, set: &[usize], jackknife: bool, fit: impl Fn(&[usize]) -> Arc<BlockFit>) -> Evaluation {
         let cols = self.columns_of(set);
         let k = self.rules.folds.max(2);
         // A row no column touches keeps the residual of the model as written.
         let mut fold_sse: Vec<Vec<f64>> = self.grams.iter().map(|g| g.folds.iter().map(|f| f.2.max(0.0)).collect()).collect();
         let mut theta = Params::zeros(self.columns.len());
-        let mut theta_without = vec![theta.clone(); k];
+        let mut theta_without = vec![theta.clone(); if jackknife { k } else { 0 }];
         for block in self.blocks_of(&cols) {
-            let fit = self.fit_block(&block);
+            let fit = fit(&block);
             for (&r, sse) in fit.rows.iter().zip(&fit.fold_sse) {
                 fold_sse[r].clone_from(sse);
             }
@@ -1642,6 +1810,39 @@ impl EffortProblem<'_> {
     /// Compares `after` (with candidate c) with `before` on the rows `rows`; `replaced` is the
     /// member of c's family that c replaces in `before`, if any.
     fn verdict(&self, before: &Evaluation, after: &Evaluation, rows: &[usize], c: usize, replaced: Option<usize>) -> Verdict {
+        let (gain, fold_share) = self.held_out_cut(before, after, rows, c);
+        let row = self.candidates[c].row;
+        let size = self.change_rms(c, &after.theta, replaced.map(|r| (r, &before.theta)));
+        let gravity_rms = self.rows[row].gravity_rms;
+        Verdict {
+            gain,
+            fold_share,
+            effort_share: size / self.rows[row].effort_rms.max(1e-12),
+            static_share: if self.candidates[c].kind.depends_on_position_alone() && gravity_rms > 0.0 {
+                size / gravity_rms
+            } else {
+                f64::INFINITY
+            },
+            inertial_share: self.inertial_share(c, size),
+            plausible: self.plausible(c, &after.theta),
+        }
+    }
+
+    /// Whether `after` (with candidate c) cuts the held-out error of `before` on the rows `rows`
+    /// as [`Self::passes`] asks: what a verdict needs first (a term's size is measured over the
+    /// samples only for a candidate that passes this).
+    fn cuts_held_out(&self, before: &Evaluation, after: &Evaluation, rows: &[usize], c: usize) -> bool {
+        let (gain, fold_share) = self.held_out_cut(before, after, rows, c);
+        self.cut_passes(gain, fold_share)
+    }
+
+    /// Whether a held-out cut of `gain` shared by `fold_share` of the folds is enough to enter.
+    fn cut_passes(&self, gain: f64, fold_share: f64) -> bool {
+        gain >= self.rules.min_cv_gain && fold_share >= self.rules.min_fold_share
+    }
+
+    /// [`Verdict::gain`] and [`Verdict::fold_share`] of `after` against `before`.
+    fn held_out_cut(&self, before: &Evaluation, after: &Evaluation, rows: &[usize], c: usize) -> (f64, f64) {
         let k = self.rules.folds.max(2);
         let sum = |e: &Evaluation| rows.iter().map(|&r| e.row_sse(r)).sum::<f64>();
         let (b, a) = (sum(before), sum(after));
@@ -1658,21 +1859,7 @@ impl EffortProblem<'_> {
                 rows.iter().map(|&r| after.fold_sse[r][f]).sum::<f64>() < rows.iter().map(|&r| before.fold_sse[r][f]).sum::<f64>()
             })
             .count();
-        let row = self.candidates[c].row;
-        let size = self.change_rms(c, &after.theta, replaced.map(|r| (r, &before.theta)));
-        let gravity_rms = self.rows[row].gravity_rms;
-        Verdict {
-            gain: if b > 0.0 { (b - a) / b } else { 0.0 },
-            fold_share: better as f64 / informative.len().max(1) as f64,
-            effort_share: size / self.rows[row].effort_rms.max(1e-12),
-            static_share: if self.candidates[c].kind.depends_on_position_alone() && gravity_rms > 0.0 {
-                size / gravity_rms
-            } else {
-                f64::INFINITY
-            },
-            inertial_share: self.inertial_share(c, size),
-            plausible: self.plausible(c, &after.theta),
-        }
+        (if b > 0.0 { (b - a) / b } else { 0.0 }, better as f64 / informative.len().max(1) as f64)
     }
 
     /// [`Verdict::inertial_share`] of candidate c whose RMS effort is `size`.
@@ -1695,7 +1882,7 @@ impl EffortProblem<'_> {
     }
 
     fn passes(&self, v: &Verdict) -> bool {
-        v.gain >= self.rules.min_cv_gain && v.fold_share >= self.rules.min_fold_share && self.material(v)
+        self.cut_passes(v.gain, v.fold_share) && self.material(v)
     }
 
     /// Whether a term's size and parameters matter, whatever the held-out data say (the static
@@ -2092,20 +2279,35 @@ impl EffortProblem<'_> {
     /// `current`: among those that may enter ([`Self::may_enter`]), or, with `whole_refinements`,
     /// among the refinements that may not (their family absent from the joint).
     fn best_step(&self, chosen: &[usize], current: &Evaluation, banned: &[bool], whole_refinements: bool) -> Option<(usize, Evaluation)> {
-        let mut best: Option<(usize, Verdict, Evaluation)> = None;
-        for (c, &ban) in banned.iter().enumerate() {
+        // The candidates are weighed in parallel (each fit depends on its set alone; the caches
+        // hold what the set's key determines), then taken in candidate order.
+        let passing: Vec<(usize, Verdict)> = (0..banned.len())
+            .into_par_iter()
             // An unresolved law never passes (`plausible`): not worth its evaluation.
-            if ban || chosen.contains(&c) || self.candidates[c].unresolved.is_some() || self.may_enter(chosen, c) == whole_refinements {
-                continue;
-            }
-            let e = self.evaluate(&self.with(chosen, c));
-            let v = self.verdict(current, &e, &self.rows_of(c), c, self.family_member(chosen, c));
+            .filter(|&c| {
+                !(banned[c]
+                    || chosen.contains(&c)
+                    || self.candidates[c].unresolved.is_some()
+                    || self.may_enter(chosen, c) == whole_refinements)
+            })
+            .filter_map(|c| {
+                let e = self.evaluate_beside(&self.with(chosen, c), c);
+                let rows = self.rows_of(c);
+                if !self.cuts_held_out(current, &e, &rows, c) {
+                    return None;
+                }
+                let v = self.verdict(current, &e, &rows, c, self.family_member(chosen, c));
+                self.passes(&v).then_some((c, v))
+            })
+            .collect();
+        let mut best: Option<(usize, Verdict)> = None;
+        for (c, v) in passing {
             // Ties (look-alike kinds) go to the earlier candidate.
-            if self.passes(&v) && best.as_ref().is_none_or(|(_, bv, _)| v.gain > bv.gain * 1.001 + 1e-12) {
-                best = Some((c, v, e));
+            if best.as_ref().is_none_or(|(_, bv)| v.gain > bv.gain * 1.001 + 1e-12) {
+                best = Some((c, v));
             }
         }
-        best.map(|(c, _, e)| (c, e))
+        best.map(|(c, _)| (c, self.evaluate(&self.with(chosen, c))))
     }
 
     /// Whether candidate c may join `chosen`: a refinement enters only in place of its base law,
@@ -2783,6 +2985,41 @@ mod tests {
         let with_accuracy = two_link_problem(&model, &tree, SelectionRules::default());
         assert_eq!(with_accuracy.nuisance.len(), 4, "two axes of each link: along the joints' axis gravity does nothing");
         assert_eq!(with_accuracy.blocks_of(&with_accuracy.columns_of(&apart)).len(), 1);
+    }
+
+    /// Forward selection weighs each candidate by extending the factors of the set it joins
+    /// (`evaluate_beside`): the same least squares as fitting the whole set afresh, to rounding,
+    /// for a candidate of one column and of two (friction by direction), beside the model's own
+    /// accuracy (which puts every column in one block) and beside another joint's heavier part.
+    #[test]
+    fn a_candidate_weighed_beside_the_chosen_terms_fits_as_the_whole_set_afresh() {
+        let model = two_link_model();
+        let (tree, _) = model.multibody().expect("tree");
+        let problem = two_link_problem(&model, &tree, SelectionRules::default());
+        let first_of = |row: usize, kind: EffectKind| first_candidate(&problem, row, kind);
+        let asymmetric = (0..problem.candidates.len())
+            .find(|&c| problem.candidates[c].row == 1 && problem.candidates[c].asymmetric)
+            .expect("friction by direction on the forearm");
+        assert_eq!(problem.candidates[asymmetric].columns.len(), 2);
+        let chosen = [first_of(0, EffectKind::CoulombFriction), first_of(1, EffectKind::MassScale)];
+        for c in [first_of(1, EffectKind::ViscousDamping), asymmetric, first_of(0, EffectKind::Armature)] {
+            let set = problem.with(&chosen, c);
+            let extended = problem.bordered_fits.lock().expect("cache").len();
+            let (beside, afresh) = (problem.evaluate_beside(&set, c), problem.evaluate(&set));
+            assert_eq!(problem.bordered_fits.lock().expect("cache").len(), extended + 1, "candidate {c}: not fitted by extension");
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + a.abs().max(b.abs()));
+            for col in problem.columns_of(&set) {
+                assert!(close(beside.theta[&col], afresh.theta[&col]), "candidate {c}, column {col}");
+            }
+            // What weighing reads: the candidate's rows' held-out error, fold by fold.
+            for r in problem.rows_of(c) {
+                for (x, y) in beside.fold_sse[r].iter().zip(&afresh.fold_sse[r]) {
+                    assert!(close(*x, *y), "candidate {c}, row {r}: held-out error {x} against {y}");
+                }
+            }
+            assert!(beside.theta_without.is_empty());
+            assert!(beside.theta[&problem.candidates[c].columns[0]].abs() > 0.0, "candidate {c} fitted");
+        }
     }
 
     /// A model whose forearm's centre of mass is 6 mm off the arm's (3 mm aside and 5 mm lower,
