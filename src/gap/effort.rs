@@ -1497,10 +1497,16 @@ impl EffortProblem<'_> {
     /// `(a, b)` ([`NormalSums::normal_equations`]).
     fn solve(&self, cols: &[usize], (mut a, b): (Vec<f64>, Vec<f64>)) -> Vec<f64> {
         let p = cols.len();
+        self.ridge(cols, &mut a);
+        solve_spd(&a, &b, p).unwrap_or_else(|| vec![0.0; p])
+    }
+
+    /// The normal equations `a` of the columns `cols` with each diagonal entry [`Self::ridged`].
+    fn ridge(&self, cols: &[usize], a: &mut [f64]) {
+        let p = cols.len();
         for (i, &c) in cols.iter().enumerate() {
             a[i * p + i] = self.ridged(c, a[i * p + i]);
         }
-        solve_spd(&a, &b, p).unwrap_or_else(|| vec![0.0; p])
     }
 
     /// Column c's diagonal entry `d` of the normal equations with its ridge: a whisper keeps
@@ -1572,9 +1578,7 @@ impl EffortProblem<'_> {
                 .normal_equations(base)
                 .into_iter()
                 .map(|(mut a, mut b)| {
-                    for (i, &c) in base.iter().enumerate() {
-                        a[i * p + i] = self.ridged(c, a[i * p + i]);
-                    }
+                    self.ridge(base, &mut a);
                     let l = cholesky(&a, p)?;
                     forward_substitute(&l, &mut b, p);
                     Some((l, b))
@@ -1647,14 +1651,13 @@ impl EffortProblem<'_> {
     }
 
     /// [`Self::evaluate`] of `set` = `chosen` with candidate c ([`Self::with`]) for weighing c
-    /// ([`Self::verdict`]): each block that holds columns of c's that the rest of the set lacks
+    /// on its rows `rows` ([`Self::rows_of`], [`Self::verdict`]): each block that holds columns of c's that the rest of the set lacks
     /// is fitted by extending the rest's factors ([`Self::bordered_fit`]), the others as
     /// `evaluate` does. What weighing needs only: the held-out error of c's rows (the other
     /// rows of an extended block keep the model's own, unread) and the parameters fitted on all
     /// folds (none fitted without each fold). The sets forward selection keeps are fitted afresh
     /// ([`Self::best_step`]), so a kept set's numbers never depend on the path that reached it.
-    fn evaluate_beside(&self, set: &[usize], c: usize) -> Evaluation {
-        let rows = self.rows_of(c);
+    fn evaluate_beside(&self, set: &[usize], c: usize, rows: &[usize]) -> Evaluation {
         let rest: Vec<usize> = set.iter().copied().filter(|&x| x != c).collect();
         let rest_cols = self.columns_of(&rest);
         let mut new: Vec<usize> = self.candidates[c].columns.iter().copied().filter(|col| rest_cols.binary_search(col).is_err()).collect();
@@ -1665,7 +1668,7 @@ impl EffortProblem<'_> {
             if block_new.is_empty() || base.is_empty() {
                 return self.fit_block(block);
             }
-            self.bordered_fit(block, &base, &block_new, &rows).unwrap_or_else(|| self.fit_block(block))
+            self.bordered_fit(block, &base, &block_new, rows).unwrap_or_else(|| self.fit_block(block))
         })
     }
 
@@ -2288,8 +2291,8 @@ impl EffortProblem<'_> {
                     || self.may_enter(chosen, c) == whole_refinements)
             })
             .filter_map(|c| {
-                let e = self.evaluate_beside(&self.with(chosen, c), c);
                 let rows = self.rows_of(c);
+                let e = self.evaluate_beside(&self.with(chosen, c), c, &rows);
                 if !self.cuts_held_out(current, &e, &rows, c) {
                     return None;
                 }
@@ -3003,7 +3006,7 @@ mod tests {
             let set = problem.with(&chosen, c);
             let extensions = || problem.bordered_fits.lock().expect("cache").values().filter(|f| f.is_some()).count();
             let extended = extensions();
-            let (beside, afresh) = (problem.evaluate_beside(&set, c), problem.evaluate(&set));
+            let (beside, afresh) = (problem.evaluate_beside(&set, c, &problem.rows_of(c)), problem.evaluate(&set));
             assert_eq!(extensions(), extended + 1, "candidate {c}: not fitted by extension");
             let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + a.abs().max(b.abs()));
             for col in problem.columns_of(&set) {
