@@ -61,7 +61,9 @@ pub struct SelectionRules {
     /// Least cut of a chain's held-out replay error (the mean over its joints of each one's
     /// squared error relative to the model as written) for which the other reading of a joint's
     /// friction (dry friction for viscous damping, or the reverse) replaces the one effort space
-    /// chose: a clear improvement of the predicted motion, not a tie broken by noise. Also the
+    /// chose: a clear improvement of the predicted motion, not a tie broken by noise; it is tried
+    /// only where effort space cannot tell the two apart (the other law's held-out effort error
+    /// within 1 / (1 − this) of its reading's, the same margin the other way). Also the
     /// least cut of a lone joint's squared replay error for which an output-error refinement the
     /// efforts contradict replaces their reading ([`crate::gap`]'s `refine_given`).
     pub min_replay_gain: f64,
@@ -2405,6 +2407,12 @@ impl EffortProblem<'_> {
     #[must_use]
     pub fn chosen_terms(&self) -> Terms {
         Terms(self.select())
+    }
+
+    /// Row r's held-out squared effort error under `terms` (every fold's held-out part).
+    #[must_use]
+    pub fn held_out_sse(&self, terms: &Terms, r: usize) -> f64 {
+        self.evaluate(&terms.0).row_sse(r)
     }
 
     /// The law `terms` read row r's friction by: a dry friction kind or viscous damping; None
