@@ -1932,10 +1932,14 @@ def arm_effects(case, defaults):
                     detail = (f"MuJoCo joint damping: added {added[kind]:g} on top of the model's own {own['damping']:g}, "
                               "which model.urdf's <dynamics> has")
                 out.append(Effect(name, kind, {param: round(total, 9)}, detail=detail))
-        offset = added_level(case, name, "effort_offset")
-        if offset != 0.0:
-            out.append(Effect(name, "effort_offset", {"offset": offset},
-                              detail=f"a constant {offset:g} added to the recorded effort (torque-sensor bias)"))
+        bias = added_level(case, name, "effort_offset")
+        if bias != 0.0:
+            # The spec's offset is what adds to the recorded effort to give the one the joint
+            # feels (as the objects' offsets here are: the engine applied the recorded effort +
+            # offset); a sensor reading `bias` over the felt effort is the offset -bias.
+            out.append(Effect(name, "effort_offset", {"offset": -bias},
+                              detail=f"a constant {bias:g} added to the recorded effort (torque-sensor bias): the joint "
+                                     f"felt the recorded effort {-bias:+g}"))
     return out
 
 
@@ -1951,7 +1955,8 @@ def add_arm_effects(spec, case):
 
 
 def arm_offsets(case, names):
-    """The torque sensors' biases: a constant added to each recorded effort."""
+    """The torque sensors' biases: a constant added to each recorded effort (truth.json's offset is
+    minus the bias: what adds to the recorded effort to give the one the joint felt)."""
     return np.array([added_level(case, n, "effort_offset") for n in names])
 
 

@@ -26,7 +26,8 @@ Concealed effects, each made the way Drake's API makes it:
   viscous_damping   Joint.set_default_damping(b), implicit in SAP's step
   armature          a JointActuator with set_default_rotor_inertia(I_r) and set_default_gear_ratio(rho): Drake's
                     reflected inertia rho^2 I_r on the mass matrix's diagonal
-  effort_offset     a constant added to the recorded effort (a torque sensor's bias), not engine physics
+  effort_offset     a constant added to the recorded effort (a torque sensor's bias), not engine physics; truth.json's
+                    offset is minus it (the spec's offset adds to the recorded effort to give the felt one)
 
 Checks (a failure stops the run), per case before it is recorded:
   rigid bodies  Drake's joint-space inertia and bias force (CalcMassMatrix, CalcBiasTerm -
@@ -84,7 +85,8 @@ class ArmCase(bullet.ArmCase):
         kinds = (("coulomb_friction", self.friction, lambda f: {"friction": float(f), "transition_speed": TRANSITION_SPEED}),
                  ("viscous_damping", self.damping, lambda b: {"damping": float(b)}),
                  ("armature", self.armature, lambda a: {"armature": float(a)}),
-                 ("effort_offset", self.offset, lambda o: {"offset": float(o)}))
+                 # The spec's offset adds to the recorded effort to give the felt one: minus the bias.
+                 ("effort_offset", self.offset, lambda o: {"offset": -float(o)}))
         return [bullet.Effect(n, kind, params(v)) for kind, values, params in kinds for n, v in zip(joints, values) if v]
 
 
@@ -250,7 +252,8 @@ def run_case(case, seed, out):
         "viscous_damping": "Joint.set_default_damping, implicit in SAP's step",
         "armature": f"JointActuator rotor inertia armature / {GEAR_RATIO:g}^2 behind a {GEAR_RATIO:g}:1 gear (reflected "
                     "inertia), actuation input zero",
-        "effort_offset": "added to the recorded effort (a torque sensor's bias)",
+        "effort_offset": "minus the bias added to the recorded effort (a torque sensor's): the joint felt the recorded "
+                         "effort + offset",
     }
     engine_detail = (f"{ENGINE}, {note}; discrete MultibodyPlant (SAP, kLagged), root welded, {DT} s steps "
                      "(ExecuteForcedEvents), efforts through the applied generalized force port, held between samples; "
