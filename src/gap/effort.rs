@@ -2011,40 +2011,50 @@ impl EffortProblem<'_> {
     /// base-law variant on its joint that fits best, if that passes on its own, and dropped
     /// otherwise.
     fn settle_refinements(&self, chosen: &mut Vec<usize>, banned: &[bool]) {
-        let folds = self.rules.folds.max(2);
         loop {
             let fitted = self.evaluate(chosen);
             let doubtful = chosen.iter().copied().filter(|&c| self.candidates[c].is_refinement()).find_map(|c| {
                 let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
                 let base = self.best_base(&rest, c, banned);
-                let jack: Vec<f64> = fitted.theta_without.iter().map(|t| self.refinement_excess(c, t)).collect();
-                let excess = self.refinement_excess(c, &fitted.theta);
-                // What the refinement changes over its best base law must matter too (it may
-                // have entered whole, judged by its full size).
-                let row = self.candidates[c].row;
-                let immaterial = base.as_ref().is_some_and(|(b, e)| {
-                    let change = self.change_rms(c, &fitted.theta, Some((*b, &e.theta)));
-                    change < self.rules.min_effort_share * self.rows[row].effort_rms
-                });
-                // And it must cut what its best base law leaves, as any term must
-                // (`min_cv_gain`): it may have entered against a worse base law than the one
-                // the final terms around it make best.
-                let thin = base.as_ref().is_some_and(|(_, e)| {
-                    let (b, a) = (e.row_sse(row), fitted.row_sse(row));
-                    b > 0.0 && (b - a) / b < self.rules.min_cv_gain
-                });
-                (excess.abs() < self.rules.min_resolved_sigmas * jackknife_sd(&jack, folds)
-                    || self.asymmetry_within_weight_error(c, excess)
-                    || immaterial
-                    || thin)
+                let excess = |t: &Params| self.refinement_excess(c, t);
+                let base_fit = base.as_ref().map(|(b, e)| (*b, e));
+                (self.adds_too_little(c, &fitted, excess, base_fit) || self.asymmetry_within_weight_error(c, excess(&fitted.theta)))
                     .then_some((rest, base))
             });
             let Some((rest, base)) = doubtful else { return };
-            // The base law must pass on its own beside the rest, whichever way the refinement
-            // entered; a law that passes only with its refinement's extra level is not reported.
-            let rest_fit = self.evaluate(&rest);
-            let passing = base.filter(|(b, e)| self.passes(&self.verdict(&rest_fit, e, &self.rows_of(*b), *b, None)));
-            *chosen = passing.map_or(rest.clone(), |(b, _)| self.with(&rest, b));
+            *chosen = self.settle_to_base(rest, base.as_ref().map(|(b, e)| (*b, e)));
+        }
+    }
+
+    /// Whether what term c adds over `base` (the reading c stands in place of, fitted beside
+    /// the others; none when no such reading fits) is too small to report: its `excess` over
+    /// that reading within [`SelectionRules::min_resolved_sigmas`] jackknife σ of none, its
+    /// change over it under [`SelectionRules::min_effort_share`] of the joint's effort (c may
+    /// have entered whole, judged by its full size), or its cut of the error that reading leaves
+    /// under [`SelectionRules::min_cv_gain`] (c may have entered against a worse reading than the
+    /// one the final terms around it make best). `fitted` is the evaluation of the set with c.
+    fn adds_too_little(&self, c: usize, fitted: &Evaluation, excess: impl Fn(&Params) -> f64, base: Option<(usize, &Evaluation)>) -> bool {
+        let row = self.candidates[c].row;
+        let jack: Vec<f64> = fitted.theta_without.iter().map(&excess).collect();
+        let unresolved = excess(&fitted.theta).abs() < self.rules.min_resolved_sigmas * jackknife_sd(&jack, self.rules.folds.max(2));
+        let immaterial = base.is_some_and(|(b, e)| {
+            self.change_rms(c, &fitted.theta, Some((b, &e.theta))) < self.rules.min_effort_share * self.rows[row].effort_rms
+        });
+        let thin = base.is_some_and(|(_, e)| {
+            let (before, after) = (e.row_sse(row), fitted.row_sse(row));
+            before > 0.0 && (before - after) / before < self.rules.min_cv_gain
+        });
+        unresolved || immaterial || thin
+    }
+
+    /// `rest` with `base` (the reading a term too small to report stood in place of) where it
+    /// passes on its own beside `rest`, whichever way the term entered; `rest` alone where it
+    /// does not: a reading that passes only with the term's extra level is not reported.
+    fn settle_to_base(&self, rest: Vec<usize>, base: Option<(usize, &Evaluation)>) -> Vec<usize> {
+        let rest_fit = self.evaluate(&rest);
+        match base {
+            Some((b, e)) if self.passes(&self.verdict(&rest_fit, e, &self.rows_of(b), b, None)) => self.with(&rest, b),
+            _ => rest,
         }
     }
 
@@ -2059,31 +2069,16 @@ impl EffortProblem<'_> {
     /// different by direction, beside its model's weight error, read as springs whose rest lay
     /// beyond the motion (0.30 N·m/rad towards 0.62 rad on a shoulder moving over -1.1..-0.45).
     fn settle_springs(&self, chosen: &mut Vec<usize>, banned: &[bool]) {
-        let folds = self.rules.folds.max(2);
         let springs: Vec<usize> = chosen.iter().copied().filter(|&c| self.candidates[c].kind == EffectKind::Spring).collect();
         for c in springs {
-            let row = self.candidates[c].row;
             let fitted = self.evaluate(chosen);
             let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != c).collect();
             let offset = |x: usize| self.candidates[x].kind == EffectKind::EffortOffset && !banned[x];
-            let base = self.best_in_place(&rest, row, offset, |_, _| true);
-            let stiffness = |t: &Params| self.effect_of(c, t).params[0];
-            let jack: Vec<f64> = fitted.theta_without.iter().map(stiffness).collect();
-            let unresolved = stiffness(&fitted.theta).abs() < self.rules.min_resolved_sigmas * jackknife_sd(&jack, folds);
-            let (immaterial, thin) = base.as_ref().map_or((false, false), |b| {
-                let change = self.change_rms(c, &fitted.theta, Some((b.candidate, &b.fit.theta)));
-                let (before, after) = (b.sse, fitted.row_sse(row));
-                (
-                    change < self.rules.min_effort_share * self.rows[row].effort_rms,
-                    before > 0.0 && (before - after) / before < self.rules.min_cv_gain,
-                )
-            });
-            if !(unresolved || immaterial || thin) {
-                continue;
+            let base = self.best_in_place(&rest, self.candidates[c].row, offset, |_, _| true);
+            let base_fit = base.as_ref().map(|b| (b.candidate, &b.fit));
+            if self.adds_too_little(c, &fitted, |t| self.effect_of(c, t).params[0], base_fit) {
+                *chosen = self.settle_to_base(rest, base_fit);
             }
-            let rest_fit = self.evaluate(&rest);
-            let passing = base.filter(|b| self.passes(&self.verdict(&rest_fit, &b.fit, &self.rows_of(b.candidate), b.candidate, None)));
-            *chosen = passing.map_or(rest, |b| b.set);
         }
     }
 

@@ -412,8 +412,8 @@ impl HeldOutReplay<'_> {
 /// 1 / (1 − [`SelectionRules::min_replay_gain`]) of its reading's); the other
 /// reading replaces effort space's when its replay error is lower by
 /// [`SelectionRules::min_replay_gain`], the joint's own replay error is no higher, and the
-/// whole recording's problem reads the joint the same way. Equation error (effort space) weighs the efforts sample by sample and is blind to
-/// how a difference in the law adds up over a swing; output error sees it (Gautier's DIDIM
+/// whole recording's problem reads the joint the same way. Equation error (effort space) weighs
+/// the efforts sample by sample and is blind to how a difference in the law adds up over a swing; output error sees it (Gautier's DIDIM
 /// validates an IDIM model the same way). A joint alone on its body is refined by its own
 /// simulation. The reading replaced is named among the rejected, with the replay's figures.
 ///
@@ -432,24 +432,21 @@ fn settle_friction_by_replay(replay: &HeldOutReplay<'_>, found: &mut Identified<
     let mut held = replay.replay(train_findings, &found.sig, horizon_s);
     let mut current = replay.score(&held, &chain_dofs);
     for &r in &chain {
-        let (Some(alt_train), Some(alt)) =
-            (train_problem.other_friction_reading(train_terms, r), found.problem.other_friction_reading(&found.terms, r))
-        else {
-            continue;
-        };
-        let (Some(law), Some(old)) = (found.problem.friction_law(&alt, r), found.problem.friction_law(&found.terms, r)) else {
-            continue;
-        };
-        if Some(law) != train_problem.friction_law(&alt_train, r) {
-            continue;
-        }
+        let Some(alt) = found.problem.other_friction_reading(&found.terms, r) else { continue };
         // The motion arbitrates only where the efforts cannot: the other law's held-out effort
         // error within the margin the replay must win by. `MuJoCo`'s Pandas against 5 %-off
         // models (one with the real arm's smooth friction, one with plain dry friction) had four
         // joints of dry friction turned to damping whose held-out effort error effort space put
         // 2.8–11× above dry friction's; the real double pendulum's elbow, turned the other way,
-        // 1.03×.
+        // 1.03×. Judged first: the training part's other reading is not needed where this fails.
         if found.problem.held_out_sse(&alt, r) * (1.0 - rules.min_replay_gain) > found.problem.held_out_sse(&found.terms, r) {
+            continue;
+        }
+        let Some(alt_train) = train_problem.other_friction_reading(train_terms, r) else { continue };
+        let (Some(law), Some(old)) = (found.problem.friction_law(&alt, r), found.problem.friction_law(&found.terms, r)) else {
+            continue;
+        };
+        if Some(law) != train_problem.friction_law(&alt_train, r) {
             continue;
         }
         let alt_train_findings = findings_with_stops(train_problem, &alt_train, &found.stops);
@@ -459,8 +456,7 @@ fn settle_friction_by_replay(replay: &HeldOutReplay<'_>, found: &mut Identified<
         // by what the swap does to the others while the joint itself replays worse (an
         // identified Panda's shoulder read as damping: the chain 71 % better, the joint 41 %
         // worse).
-        let own = dofs.iter().position(|&j| j == found.rows[r]).map(|d| [d]);
-        let own_no_worse = own.is_some_and(|d| replay.score(&alt_held, &d) <= replay.score(&held, &d));
+        let own_no_worse = replay.chain_dof(found.rows[r]).is_some_and(|d| replay.score(&alt_held, &[d]) <= replay.score(&held, &[d]));
         if s < (1.0 - rules.min_replay_gain) * current && own_no_worse {
             held = alt_held;
             *train_terms = alt_train;
