@@ -413,9 +413,10 @@ impl HeldOutReplay<'_> {
 /// reading replaces effort space's when its replay error is lower by
 /// [`SelectionRules::min_replay_gain`], the joint's own replay error is no higher, and the
 /// whole recording's problem reads the joint the same way. Equation error (effort space) weighs
-/// the efforts sample by sample and is blind to how a difference in the law adds up over a swing; output error sees it (Gautier's DIDIM
-/// validates an IDIM model the same way). A joint alone on its body is refined by its own
-/// simulation. The reading replaced is named among the rejected, with the replay's figures.
+/// the efforts sample by sample and is blind to how a difference in the law adds up over a
+/// swing; output error sees it (Gautier's DIDIM validates an IDIM model the same way). A joint
+/// alone on its body is refined by its own simulation. The reading replaced is named among the
+/// rejected, with the replay's figures.
 ///
 /// Returns the held-out replay of the training findings it ends with, when it made one (none
 /// without a joint in a chain).
