@@ -63,11 +63,14 @@ pub fn forward_substitute(l: &[f64], y: &mut [f64], n: usize) {
 /// Solves `Lᵀ x = z` over `y` (holding `z`, receiving `x`) for a Cholesky factor from [`cholesky`].
 pub fn back_substitute(l: &[f64], y: &mut [f64], n: usize) {
     for i in (0..n).rev() {
-        let mut v = y[i];
-        for k in i + 1..n {
-            v -= l[k * n + i] * y[k];
+        // Column i of L below the diagonal (k = i + 1, …), walked down without an index check.
+        let below = l.get((i + 1) * n + i..).unwrap_or(&[]).iter().step_by(n);
+        let (head, done) = y.split_at_mut(i + 1);
+        let mut v = head[i];
+        for (x, yk) in below.zip(done.iter()) {
+            v -= x * yk;
         }
-        y[i] = v / l[i * n + i];
+        head[i] = v / l[i * n + i];
     }
 }
 

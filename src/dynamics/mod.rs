@@ -152,21 +152,29 @@ impl MultiBody {
         b.dof.map_or(0.0, |d| v.get(d).copied().unwrap_or(0.0))
     }
 
+    /// Each body's placement in its parent's frame at q.
+    #[must_use]
+    pub fn placements(&self, q: &[f64]) -> Vec<ParentFromChild> {
+        self.bodies.iter().map(|b| b.parent_from_joint.then(&b.joint.transform(Self::coordinate(q, b)))).collect()
+    }
+
     /// The forward pass of RNEA: placements, velocities and accelerations of every body.
     #[must_use]
     pub fn kinematics(&self, q: &[f64], qd: &[f64], qdd: &[f64], gravity: DVec3) -> Kinematics {
+        self.kinematics_at(self.placements(q), qd, qdd, gravity)
+    }
+
+    /// [`Self::kinematics`] from the placements at q ([`Self::placements`]).
+    fn kinematics_at(&self, parent_from_body: Vec<ParentFromChild>, qd: &[f64], qdd: &[f64], gravity: DVec3) -> Kinematics {
         let n = self.bodies.len();
-        let mut k =
-            Kinematics { parent_from_body: Vec::with_capacity(n), velocity: Vec::with_capacity(n), acceleration: Vec::with_capacity(n) };
+        let mut k = Kinematics { parent_from_body, velocity: Vec::with_capacity(n), acceleration: Vec::with_capacity(n) };
         let base_acceleration = Motion { angular: DVec3::ZERO, linear: -gravity };
-        for b in &self.bodies {
-            let x = b.parent_from_joint.then(&b.joint.transform(Self::coordinate(q, b)));
+        for (b, x) in self.bodies.iter().zip(&k.parent_from_body) {
             let (v_parent, a_parent) = b.parent.map_or((Motion::default(), base_acceleration), |p| (k.velocity[p], k.acceleration[p]));
             let s = b.joint.subspace();
             let vj = s * Self::coordinate(qd, b);
             let v = x.motion_to_child(&v_parent) + vj;
             let a = x.motion_to_child(&a_parent) + s * Self::coordinate(qdd, b) + v.cross_motion(&vj);
-            k.parent_from_body.push(x);
             k.velocity.push(v);
             k.acceleration.push(a);
         }
@@ -215,9 +223,23 @@ impl MultiBody {
     /// The joint-space mass matrix (CRBA), row-major n×n.
     #[must_use]
     pub fn mass_matrix(&self, q: &[f64]) -> Vec<f64> {
+        self.mass_matrix_at(&self.placements(q))
+    }
+
+    /// The mass matrix at q and the bias efforts at (q, q̇) ([`Self::mass_matrix`],
+    /// [`Self::bias`]: the same numbers) from one set of placements, as a forward-dynamics step
+    /// needs both.
+    #[must_use]
+    pub fn mass_matrix_and_bias(&self, q: &[f64], qd: &[f64], gravity: DVec3) -> (Vec<f64>, Vec<f64>) {
+        let placements = self.placements(q);
+        let m = self.mass_matrix_at(&placements);
+        let k = self.kinematics_at(placements, qd, &[], gravity);
+        (m, self.efforts_with(&k, |i| Some(self.bodies[i].inertia)))
+    }
+
+    /// [`Self::mass_matrix`] from the placements at q.
+    fn mass_matrix_at(&self, placements: &[ParentFromChild]) -> Vec<f64> {
         let n = self.dof_count;
-        let placements: Vec<ParentFromChild> =
-            self.bodies.iter().map(|b| b.parent_from_joint.then(&b.joint.transform(Self::coordinate(q, b)))).collect();
         let mut composite: Vec<RigidInertia> = self.bodies.iter().map(|b| b.inertia).collect();
         for i in (0..self.bodies.len()).rev() {
             if let Some(p) = self.bodies[i].parent {

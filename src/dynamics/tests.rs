@@ -128,6 +128,18 @@ fn mass_matrix_is_the_acceleration_part_of_inverse_dynamics() {
     }
 }
 
+/// A replay step asks for both from one set of placements: the same numbers, bit for bit.
+#[test]
+fn mass_matrix_and_bias_together_are_each_alone_bit_for_bit() {
+    let mb = branched();
+    for (q, qd) in [([0.4, -1.1, 0.07], [0.9, -2.0, 0.3]), ([-2.5, 0.3, -0.2], [0.0, 4.0, -1.5])] {
+        let (m, bias) = mb.mass_matrix_and_bias(&q, &qd, G);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+        assert_eq!(bits(&m), bits(&mb.mass_matrix(&q)));
+        assert_eq!(bits(&bias), bits(&mb.bias(&q, &qd, G)));
+    }
+}
+
 /// Energy balance: d/dt (kinetic + potential) = q̇ · τ, checked by finite differences along a
 /// trajectory with q̈ from forward dynamics (no friction anywhere).
 #[test]

@@ -71,12 +71,11 @@ pub fn replay(tree: &MultiBody, physics: &[JointPhysics], input: &ChainInput<'_>
 /// One step; false when the mass matrix is singular (the replay stops there).
 fn step(tree: &MultiBody, physics: &[JointPhysics], effort: &[f64], gravity: DVec3, q: &mut [f64], v: &mut [f64], h: f64) -> bool {
     let nd = q.len();
-    let mut m = tree.mass_matrix(q);
+    let (mut m, bias) = tree.mass_matrix_and_bias(q, v, gravity);
     for d in 0..nd {
         m[d * nd + d] += physics[d].armature;
     }
     let Some(w) = crate::linalg::inverse_spd(&m, nd) else { return false };
-    let bias = tree.bias(q, v, gravity);
     let rhs: Vec<f64> = (0..nd)
         .map(|d| {
             let p = &physics[d];
@@ -110,23 +109,32 @@ fn friction_impulses(physics: &[JointPhysics], w: &[f64], v_free: &[f64], v_old:
         .map(|(phys, &v)| {
             let s = phys.friction_shape.transition_speed;
             (s > 0.0).then(|| {
-                let level = phys.friction_level(v);
-                let slope = level / s * (1.0 - (v / s).tanh().powi(2));
-                (phys.smooth_friction(v).abs() * v.signum(), slope)
+                // [`JointPhysics::smooth_friction`]'s force, its tanh taken once.
+                let (level, tanh) = (phys.friction_level(v), (v / s).tanh());
+                let slope = level / s * (1.0 - tanh.powi(2));
+                ((-level * tanh).abs() * v.signum(), slope)
             })
         })
         .collect();
     for _ in 0..SWEEPS {
+        let mut moved = false;
         for d in 0..nd {
             let wdd = w[d * nd + d].max(1e-12);
             let c = v_free[d] + (0..nd).filter(|&k| k != d).map(|k| w[d * nd + k] * p[k]).sum::<f64>();
-            p[d] = if let Some((force, slope)) = smooth[d] {
+            let next = if let Some((force, slope)) = smooth[d] {
                 -h * (force + slope * (c - v_old[d])) / (1.0 + h * slope * wdd)
             } else {
                 // Ideal Coulomb: the impulse that stops the joint, within the friction cone.
                 let level = h * physics[d].friction_level(if c == 0.0 { v_old[d] } else { c });
                 (-c / wdd).clamp(-level, level)
             };
+            moved |= next.to_bits() != p[d].to_bits();
+            p[d] = next;
+        }
+        // A sweep that changed no impulse to the bit is a fixed point: every later sweep would
+        // compute the same numbers again.
+        if !moved {
+            break;
         }
     }
     p

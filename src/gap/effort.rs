@@ -272,11 +272,12 @@ const DIFFERENTIATOR_SAMPLES: f64 = 3.0;
 pub fn signals(time_s: &[f64], positions: &[Vec<f64>], efforts: &[Option<Vec<f64>>], band: &Bandwidth) -> Signals {
     let n = time_s.len();
     let (half_width_s, narrow) = (band.half_width_s, band.narrow_s);
-    let raw: Vec<Vec<[f64; 3]>> = positions.iter().map(|y| local_cubic(time_s, y, narrow)).collect();
+    // Each dof's signals are its own: in parallel, collected in dof order.
+    let raw: Vec<Vec<[f64; 3]>> = positions.par_iter().map(|y| local_cubic(time_s, y, narrow)).collect();
     let valid: Vec<bool> = (0..n).map(|i| raw.iter().all(|d| d[i].iter().all(|v| v.is_finite()))).collect();
     let filter = Smoother::new(time_s, &valid, time_s, band.sigma_s);
     let q: Vec<Vec<[f64; 3]>> = positions
-        .iter()
+        .par_iter()
         .map(|y| {
             let values: Vec<f64> = local_cubic(time_s, y, half_width_s).into_iter().map(|x| x[0]).collect();
             local_cubic(time_s, &values, narrow)
@@ -284,7 +285,7 @@ pub fn signals(time_s: &[f64], positions: &[Vec<f64>], efforts: &[Option<Vec<f64
         .collect();
     let mid: Vec<f64> = (0..n).map(|i| if i + 1 < n { 0.5 * (time_s[i] + time_s[i + 1]) } else { time_s[i] }).collect();
     let effort: Vec<Option<Vec<f64>>> = efforts
-        .iter()
+        .par_iter()
         .map(|e| {
             e.as_ref().map(|e| {
                 let finite: Vec<bool> = e.iter().map(|v| v.is_finite()).collect();
@@ -293,7 +294,7 @@ pub fn signals(time_s: &[f64], positions: &[Vec<f64>], efforts: &[Option<Vec<f64
         })
         .collect();
     let effort_size: Vec<Option<Vec<f64>>> =
-        efforts.iter().map(|e| e.as_ref().map(|e| local_cubic(time_s, e, half_width_s).into_iter().map(|x| x[0]).collect())).collect();
+        efforts.par_iter().map(|e| e.as_ref().map(|e| local_cubic(time_s, e, half_width_s).into_iter().map(|x| x[0]).collect())).collect();
     let (t0, t1) = (time_s.first().copied().unwrap_or(0.0), time_s.last().copied().unwrap_or(0.0));
     let edge = band.support_s();
     let usable = (0..n)
@@ -917,29 +918,97 @@ fn rms(v: impl Iterator<Item = f64>) -> f64 {
     if c == 0 { 0.0 } else { (s / c as f64).sqrt() }
 }
 
+/// What every reading of one set of signals shares (the whole recording's, the training part's,
+/// one with more samples excluded at stops): the model's efforts and the first-moment efforts
+/// of the bodies its chain joints carry, filtered like the measured efforts. The readings differ
+/// only in the samples they use, which [`EffortProblem::new`] masks; computed once, they are the
+/// same numbers as each reading's own.
+pub struct ModelReading {
+    tree: MultiBody,
+    /// Per effort joint: the bodies of its moving part.
+    part_of: Vec<Vec<usize>>,
+    /// Per effort joint: the bodies it carries, none for a joint alone on its body.
+    beyond: Vec<Vec<usize>>,
+    me: ModelEfforts,
+    /// body → per axis of its frame → per dof: the filtered effort of its unit first moment
+    /// (every sample, unmasked); empty without model-accuracy columns.
+    moments: BTreeMap<usize, [Vec<Vec<f64>>; 3]>,
+}
+
+impl ModelReading {
+    /// The model's efforts over `sig` for the effort joints `effort_joints` (model joint
+    /// indices); None where the model has no tree.
+    #[must_use]
+    pub fn new(model: &GapModel, sig: &Signals, gravity: DVec3, effort_joints: &[usize], rules: &SelectionRules) -> Option<Self> {
+        let (tree, body_of_link) = model.multibody().ok()?;
+        let part_of: Vec<Vec<usize>> =
+            effort_joints.iter().map(|&j| body_of_link[model.joints[j].child].map(|b| moving_part(&tree, b)).unwrap_or_default()).collect();
+        let mut bodies: Vec<usize> = part_of.iter().flatten().copied().collect();
+        bodies.sort_unstable();
+        bodies.dedup();
+        let beyond: Vec<Vec<usize>> = effort_joints
+            .iter()
+            .map(|&j| match body_of_link[model.joints[j].child] {
+                Some(b) if in_serial_chain(model, j) => bodies_beyond(&tree, b),
+                _ => Vec::new(),
+            })
+            .collect();
+        let dof_of: Vec<usize> = effort_joints.iter().map(|&j| model.dofs().iter().position(|&x| x == j)).collect::<Option<_>>()?;
+        let (me, moments) = rayon::join(
+            || model_efforts(model, &tree, sig, gravity, &bodies),
+            || first_moment_columns(&tree, sig, gravity, &beyond, &dof_of, rules),
+        );
+        Some(Self { tree, part_of, beyond, me, moments })
+    }
+}
+
+/// The filtered first-moment efforts ([`ModelReading::moments`]) of the bodies in `beyond`, on
+/// the dofs (`dof_of[r]`: effort joint r's) of the effort joints that carry each; empty on the
+/// others.
+fn first_moment_columns(
+    tree: &MultiBody,
+    sig: &Signals,
+    gravity: DVec3,
+    beyond: &[Vec<usize>],
+    dof_of: &[usize],
+    rules: &SelectionRules,
+) -> BTreeMap<usize, [Vec<Vec<f64>>; 3]> {
+    let mut bodies: Vec<usize> = beyond.iter().flatten().copied().collect();
+    bodies.sort_unstable();
+    bodies.dedup();
+    if bodies.is_empty() || rules.first_moment_tolerance <= 0.0 {
+        return BTreeMap::new();
+    }
+    first_moment_efforts(tree, &sig.raw, gravity, &bodies)
+        .into_iter()
+        .map(|(b, axes)| {
+            let carried = |d: usize| (0..beyond.len()).any(|r| dof_of[r] == d && beyond[r].contains(&b));
+            let filtered = |dofs: Vec<Vec<f64>>| -> Vec<Vec<f64>> {
+                dofs.par_iter().enumerate().map(|(d, x)| if carried(d) { sig.filter.apply(x) } else { Vec::new() }).collect()
+            };
+            (b, axes.map(filtered))
+        })
+        .collect()
+}
+
 impl<'a> EffortProblem<'a> {
-    /// Sets up the rows (`effort_joints`: model joint indices with a recorded effort), the
-    /// candidate columns and their Gram matrices. `excluded[row][i]` marks samples in contact
-    /// with a stop.
+    /// Sets up the rows (`effort_joints`: model joint indices with a recorded effort, those
+    /// `reading` was made for), the candidate columns and their Gram matrices. `excluded[row][i]`
+    /// marks samples in contact with a stop; `train`, the samples the reading may use.
     #[must_use]
     pub fn new(
         model: &'a GapModel,
         sig: &Signals,
+        reading: &ModelReading,
         gravity: DVec3,
         effort_joints: &[usize],
         excluded: &[Vec<bool>],
         train: &[bool],
         rules: SelectionRules,
     ) -> Option<Self> {
-        let (tree, body_of_link) = model.multibody().ok()?;
         let dofs = model.dofs();
         let n = sig.time_s.len();
-        let part_of: Vec<Vec<usize>> =
-            effort_joints.iter().map(|&j| body_of_link[model.joints[j].child].map(|b| moving_part(&tree, b)).unwrap_or_default()).collect();
-        let mut bodies: Vec<usize> = part_of.iter().flatten().copied().collect();
-        bodies.sort_unstable();
-        bodies.dedup();
-        let me = model_efforts(model, &tree, sig, gravity, &bodies);
+        let me = &reading.me;
         let mut rows = Vec::new();
         let mut used = Vec::new();
         for (r, &j) in effort_joints.iter().enumerate() {
@@ -987,15 +1056,8 @@ impl<'a> EffortProblem<'a> {
         };
         problem.fold_of = problem.assign_folds(sig);
         problem.moving = problem.moving_folds(sig);
-        problem.build_candidates(sig, &me, &part_of, gravity.normalize_or_zero());
-        let beyond: Vec<Vec<usize>> = effort_joints
-            .iter()
-            .map(|&j| match body_of_link[model.joints[j].child] {
-                Some(b) if in_serial_chain(model, j) => bodies_beyond(&tree, b),
-                _ => Vec::new(),
-            })
-            .collect();
-        problem.add_model_accuracy(&tree, sig, gravity, &beyond);
+        problem.build_candidates(sig, me, &reading.part_of, gravity.normalize_or_zero());
+        problem.add_model_accuracy(reading, sig);
         problem.weights = problem.rows.iter().map(|r| 1.0 / robust_scale(&r.residual).max(1e-9).powi(2)).collect();
         problem.build_grams();
         problem.sums = NormalSums::new(&problem.grams, problem.columns.len(), problem.rules.folds.max(2));
@@ -1005,15 +1067,11 @@ impl<'a> EffortProblem<'a> {
     /// Adds the model's first-moment error as nuisance columns ([`super::accuracy`]): per body
     /// carried by a chain joint and per axis of its frame, one column on every chain row that
     /// carries it, with its prior's precision; every fit includes them ([`Self::columns_of`]).
-    /// `beyond[r]`: the bodies row r's joint carries, none for a joint alone on its body.
-    fn add_model_accuracy(&mut self, tree: &MultiBody, sig: &Signals, gravity: DVec3, beyond: &[Vec<usize>]) {
-        let mut bodies: Vec<usize> = beyond.iter().flatten().copied().collect();
-        bodies.sort_unstable();
-        bodies.dedup();
-        if bodies.is_empty() || self.rules.first_moment_tolerance <= 0.0 {
+    fn add_model_accuracy(&mut self, reading: &ModelReading, sig: &Signals) {
+        let (tree, beyond, moments) = (&reading.tree, &reading.beyond, &reading.moments);
+        if moments.is_empty() {
             return;
         }
-        let moments = first_moment_efforts(tree, &sig.raw, gravity, &bodies);
         // The weighted sums of the normal equations count every sample, but the filtered terms
         // and efforts are correlated over the filter's width: one independent piece of evidence
         // per 2√π σ of time (a Gaussian filter's equivalent width). The prior is weighed against
@@ -1022,7 +1080,7 @@ impl<'a> EffortProblem<'a> {
         let samples_per_piece = (2.0 * std::f64::consts::PI.sqrt() * sig.band.sigma_s / dt).max(1.0);
         // A body's owner: the row that carries it with the fewest bodies (its nearest joint).
         let owner = |b: usize| (0..beyond.len()).filter(|&r| beyond[r].contains(&b)).min_by_key(|&r| (beyond[r].len(), r));
-        for &b in &bodies {
+        for &b in moments.keys() {
             let Some(owner) = owner(b) else { continue };
             let sd = first_moment_prior(tree, b, self.rules.first_moment_tolerance, self.rules.first_moment_min_lever_m);
             if sd <= 0.0 {
@@ -1032,13 +1090,7 @@ impl<'a> EffortProblem<'a> {
                 let mut rows = BTreeMap::new();
                 for (r, info) in self.rows.iter().enumerate().filter(|(r, _)| beyond[*r].contains(&b)) {
                     let used = &self.used[r];
-                    let values: Vec<f64> = sig
-                        .filter
-                        .apply(&axis[info.dof])
-                        .into_iter()
-                        .enumerate()
-                        .map(|(i, v)| if used[i] { v } else { f64::NAN })
-                        .collect();
+                    let values: Vec<f64> = axis[info.dof].iter().zip(used).map(|(&v, &u)| if u { v } else { f64::NAN }).collect();
                     if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
                         rows.insert(r, values);
                     }
@@ -1377,46 +1429,75 @@ impl EffortProblem<'_> {
     /// Per row (in parallel), the Gram matrices of its columns fold by fold.
     fn build_grams(&mut self) {
         let k = self.rules.folds.max(2);
-        self.grams = (0..self.rows.len())
-            .into_par_iter()
-            .map(|r| {
-                let columns: Vec<usize> = (0..self.columns.len()).filter(|&c| self.columns[c].rows.contains_key(&r)).collect();
-                let m = columns.len();
-                let mut folds = vec![(vec![0.0; m * m], vec![0.0; m], 0.0, 0usize); k];
-                let values: Vec<&Vec<f64>> = columns.iter().map(|&c| &self.columns[c].rows[&r]).collect();
-                let w = self.weights[r];
-                let mut phi = vec![0.0; m];
-                for (i, &res) in self.rows[r].residual.iter().enumerate() {
-                    if !self.used[r][i] || !res.is_finite() {
-                        continue;
+        self.grams = (0..self.rows.len()).into_par_iter().map(|r| self.row_gram(r, k)).collect();
+    }
+
+    /// Row r's weighted sums over each of the `k` folds' used samples (those with a finite
+    /// residual), taken in sample order: of each pair of its columns (a value that is not finite
+    /// counts as zero), of each column times the residual, of the residual squared; and the
+    /// samples' count. Each sum is a dot product over the fold's samples gathered apart, four
+    /// pairs at a time, so that it reads memory in order and runs four sums side by side; each
+    /// adds the same products in the same order as a pass sample by sample would.
+    fn row_gram(&self, r: usize, k: usize) -> RowGram {
+        let columns: Vec<usize> = (0..self.columns.len()).filter(|&c| self.columns[c].rows.contains_key(&r)).collect();
+        let m = columns.len();
+        let values: Vec<&Vec<f64>> = columns.iter().map(|&c| &self.columns[c].rows[&r]).collect();
+        let (w, residual) = (self.weights[r], &self.rows[r].residual);
+        let mut samples = vec![Vec::new(); k];
+        for (i, &res) in residual.iter().enumerate() {
+            if self.used[r][i] && res.is_finite() {
+                samples[self.fold_of[i]].push(i);
+            }
+        }
+        let folds = samples
+            .iter()
+            .map(|idx| {
+                let phi: Vec<Vec<f64>> =
+                    values.iter().map(|v| idx.iter().map(|&i| if v[i].is_finite() { v[i] } else { 0.0 }).collect()).collect();
+                let res: Vec<f64> = idx.iter().map(|&i| residual[i]).collect();
+                let mut gram = vec![0.0; m * m];
+                let mut cr = vec![0.0; m];
+                for a in 0..m {
+                    let wa: Vec<f64> = phi[a].iter().map(|&p| w * p).collect();
+                    cr[a] = ordered_dot(&wa, &res);
+                    let row = &mut gram[a * m..(a + 1) * m];
+                    let mut b = a;
+                    while b + 4 <= m {
+                        row[b..b + 4].copy_from_slice(&ordered_dot4(&wa, [&phi[b], &phi[b + 1], &phi[b + 2], &phi[b + 3]]));
+                        b += 4;
                     }
-                    for (a, v) in values.iter().enumerate() {
-                        phi[a] = if v[i].is_finite() { v[i] } else { 0.0 };
+                    for (x, p) in row[b..].iter_mut().zip(&phi[b..]) {
+                        *x = ordered_dot(&wa, p);
                     }
-                    let f = &mut folds[self.fold_of[i]];
-                    for a in 0..m {
-                        if phi[a] == 0.0 {
-                            continue;
-                        }
-                        f.1[a] += w * phi[a] * res;
-                        for b in a..m {
-                            f.0[a * m + b] += w * phi[a] * phi[b];
-                        }
-                    }
-                    f.2 += w * res * res;
-                    f.3 += 1;
                 }
-                for f in &mut folds {
-                    for a in 0..m {
-                        for b in 0..a {
-                            f.0[a * m + b] = f.0[b * m + a];
-                        }
+                for a in 0..m {
+                    for b in 0..a {
+                        gram[a * m + b] = gram[b * m + a];
                     }
                 }
-                RowGram { columns, folds }
+                let rr = res.iter().fold(0.0, |s, &x| s + w * x * x);
+                (gram, cr, rr, idx.len())
             })
             .collect();
+        RowGram { columns, folds }
     }
+}
+
+/// Σ x·y, added in order.
+fn ordered_dot(x: &[f64], y: &[f64]) -> f64 {
+    x.iter().zip(y).fold(0.0, |s, (a, b)| s + a * b)
+}
+
+/// Four [`ordered_dot`]s of `x` at once, each added in order.
+fn ordered_dot4(x: &[f64], y: [&[f64]; 4]) -> [f64; 4] {
+    let mut s = [0.0; 4];
+    for ((((&a, &b0), &b1), &b2), &b3) in x.iter().zip(y[0]).zip(y[1]).zip(y[2]).zip(y[3]) {
+        s[0] += a * b0;
+        s[1] += a * b1;
+        s[2] += a * b2;
+        s[3] += a * b3;
+    }
+    s
 }
 
 /// A model (a set of candidates) evaluated by cross-validation.
@@ -2967,7 +3048,8 @@ mod tests {
         let sig = signals(&time_s, &q, &efforts, &band);
         let rows: Vec<usize> = model.dofs();
         let excluded = vec![vec![false; time_s.len()]; rows.len()];
-        EffortProblem::new(model, &sig, gravity, &rows, &excluded, &vec![true; time_s.len()], rules).expect("problem")
+        let reading = ModelReading::new(model, &sig, gravity, &rows, &rules).expect("reading");
+        EffortProblem::new(model, &sig, &reading, gravity, &rows, &excluded, &vec![true; time_s.len()], rules).expect("problem")
     }
 
     /// [`EffortProblem::solve`] with its normal equations added up afresh from the rows' Gram
@@ -3044,6 +3126,47 @@ mod tests {
         let with_accuracy = two_link_problem(&model, &tree, SelectionRules::default());
         assert_eq!(with_accuracy.nuisance.len(), 4, "two axes of each link: along the joints' axis gravity does nothing");
         assert_eq!(with_accuracy.blocks_of(&with_accuracy.columns_of(&apart)).len(), 1);
+    }
+
+    /// The rows' Gram matrices are summed pair by pair over each fold's samples gathered apart
+    /// (`row_gram`): bit for bit the sums of one pass sample by sample, which the findings of
+    /// earlier releases were made from.
+    #[test]
+    fn grams_summed_pair_by_pair_are_the_sums_sample_by_sample_bit_for_bit() {
+        let model = two_link_model();
+        let (tree, _) = model.multibody().expect("tree");
+        let problem = two_link_problem_noisy(&model, &tree, SelectionRules::default(), 0.05, 0.01);
+        let k = problem.rules.folds.max(2);
+        for (r, g) in problem.grams.iter().enumerate() {
+            let m = g.columns.len();
+            assert!(m > 20, "row {r}: {m} columns");
+            let values: Vec<&Vec<f64>> = g.columns.iter().map(|&c| &problem.columns[c].rows[&r]).collect();
+            let w = problem.weights[r];
+            let mut want = vec![(vec![0.0; m * m], vec![0.0; m], 0.0, 0usize); k];
+            for (i, &res) in problem.rows[r].residual.iter().enumerate() {
+                if !problem.used[r][i] || !res.is_finite() {
+                    continue;
+                }
+                let phi: Vec<f64> = values.iter().map(|v| if v[i].is_finite() { v[i] } else { 0.0 }).collect();
+                let f = &mut want[problem.fold_of[i]];
+                for a in 0..m {
+                    f.1[a] += w * phi[a] * res;
+                    for b in 0..m {
+                        f.0[a * m + b] += w * phi[a] * phi[b];
+                    }
+                }
+                f.2 += w * res * res;
+                f.3 += 1;
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+            for (fold, (got, want)) in g.folds.iter().zip(&want).enumerate() {
+                // The lower triangle mirrors the upper one, as the normal equations read it.
+                let upper = |x: &[f64]| (0..m * m).map(|ij| x[(ij / m).min(ij % m) * m + (ij / m).max(ij % m)]).collect::<Vec<f64>>();
+                assert_eq!(bits(&got.0), bits(&upper(&want.0)), "row {r}, fold {fold}: Gram");
+                assert_eq!(bits(&got.1), bits(&want.1), "row {r}, fold {fold}: c·r");
+                assert_eq!((got.2.to_bits(), got.3), (want.2.to_bits(), want.3), "row {r}, fold {fold}: r·r");
+            }
+        }
     }
 
     /// Forward selection weighs each candidate by extending the factors of the set it joins

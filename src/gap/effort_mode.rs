@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::chain::{ChainInput, replay};
 use super::effects::{Effect, EffectKind, JointPhysics};
-use super::effort::{Bandwidth, EffortProblem, JointFinding, SelectionRules, Signals, Terms, signals};
+use super::effort::{Bandwidth, EffortProblem, JointFinding, ModelReading, SelectionRules, Signals, Terms, signals};
 use super::effort::{in_serial_chain, moving_part};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
@@ -285,7 +285,9 @@ fn identify_at<'a>(
     }
     let everything = vec![true; n];
     let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
-    let first = EffortProblem::new(model, &sig, gravity, &rows, &excluded, &everything, rules.clone())?;
+    // The model's efforts are the same for every reading below: computed once.
+    let reading = ModelReading::new(model, &sig, gravity, &rows, rules)?;
+    let first = EffortProblem::new(model, &sig, &reading, gravity, &rows, &excluded, &everything, rules.clone())?;
     let stops = unmodelled_stops(model, rec, positions, first.rows());
     for (r, found) in stops.iter().enumerate() {
         for stop in found {
@@ -298,14 +300,14 @@ fn identify_at<'a>(
             let problem = if stops.iter().all(Vec::is_empty) {
                 first
             } else {
-                EffortProblem::new(model, &sig, gravity, &rows, &excluded, &everything, rules.clone()).unwrap_or(first)
+                EffortProblem::new(model, &sig, &reading, gravity, &rows, &excluded, &everything, rules.clone()).unwrap_or(first)
             };
             let terms = problem.chosen_terms();
             let findings = findings_with_stops(&problem, &terms, &stops);
             (problem, terms, findings)
         },
         || {
-            let train = EffortProblem::new(model, &sig, gravity, &rows, &excluded, &train, rules.clone()).map(|p| {
+            let train = EffortProblem::new(model, &sig, &reading, gravity, &rows, &excluded, &train, rules.clone()).map(|p| {
                 let t = p.chosen_terms();
                 (p, t)
             });
@@ -354,6 +356,23 @@ impl HeldOutReplay<'_> {
         let (physics, fitted) =
             fitted_physics(self.model, self.tree, self.body_of_link, &effects_by_joint(findings), &first_moments_of(findings));
         replay_pieces(&fitted, &physics, self.input, sig, self.t_split, horizon_s)
+    }
+
+    /// Row r's refinement of dry friction in the reading `(problem, terms)` replaced by its base
+    /// law ([`EffortProblem::base_reading`]): the base reading, its findings and its held-out
+    /// replay (`at`: the stops, signals and piece length the replays use); None where the reading
+    /// holds no refinement on row r.
+    fn base_replayed(
+        &self,
+        problem: &EffortProblem<'_>,
+        terms: &Terms,
+        (stops, sig, horizon_s): (&[Vec<FoundStop>], &Signals, f64),
+        r: usize,
+    ) -> Option<(Terms, Vec<JointFinding>, Vec<Vec<f64>>)> {
+        let base = problem.base_reading(terms, r)?;
+        let findings = findings_with_stops(problem, &base, stops);
+        let replayed = self.replay(&findings, sig, horizon_s);
+        Some((base, findings, replayed))
     }
 
     /// Row r's term of `kind` taken out of the training reading `(problem, terms)` and the
@@ -511,48 +530,74 @@ fn settle_refinements_by_replay(
     let horizon_s = found.band.held_out_horizon_s();
     // The whole recording's findings replayed through the held-out part, once it is needed.
     let mut whole_held: Option<Vec<Vec<f64>>> = None;
-    for r in 0..found.rows.len() {
-        let Some(d) = replay.chain_dof(found.rows[r]) else { continue };
-        if let (Some((train_problem, train_terms)), Some(train_findings)) = (found.train.as_mut(), found.train_findings.as_mut())
-            && let Some(base) = train_problem.base_reading(train_terms, r)
-        {
-            let base_findings = findings_with_stops(train_problem, &base, &found.stops);
-            let replayed = replay.replay(&base_findings, &found.sig, horizon_s);
-            if !shows_in_motion(rules, replay.score(&held, &[d]), replay.score(&replayed, &[d])) {
-                held = replayed;
-                *train_terms = base;
-                *train_findings = base_findings;
-            }
-        }
-        let Some(base) = found.problem.base_reading(&found.terms, r) else { continue };
-        let Some(refined) =
-            found.findings[r].effects.iter().find(|e| matches!(e.kind, EffectKind::StribeckFriction | EffectKind::CoulombFriction))
-        else {
-            continue;
-        };
-        let (term, what) = if refined.kind == EffectKind::StribeckFriction {
-            (refined.kind.name().to_string(), "a Stribeck law")
-        } else {
-            (format!("{} with friction_reverse", refined.kind.name()), "friction that differs by direction")
-        };
-        let base_findings = findings_with_stops(&found.problem, &base, &found.stops);
-        let whole = whole_held.get_or_insert_with(|| replay.replay(&found.findings, &found.sig, horizon_s));
-        let replayed = replay.replay(&base_findings, &found.sig, horizon_s);
-        let (with_it, without_it) = (replay.score(whole, &[d]), replay.score(&replayed, &[d]));
-        if shows_in_motion(rules, with_it, without_it) {
-            continue;
-        }
-        whole_held = Some(replayed);
-        found.findings = base_findings;
-        found.terms = base;
-        let line = format!(
-            "{term}: effort space read the joint's dry friction as {what}, but its base law replays the held-out part {} \
-             ({without_it:.2e} against {with_it:.2e} relative to the model as written): the motion does not show the refinement",
-            if without_it <= with_it { "as well or better" } else { "hardly worse" },
+    let Identified { sig, rows, problem, terms, train, stops, findings, train_findings, overruled, .. } = found;
+    let at: (&[Vec<FoundStop>], &Signals, f64) = (stops, sig, horizon_s);
+    for (r, &joint) in rows.iter().enumerate() {
+        let Some(d) = replay.chain_dof(joint) else { continue };
+        // The training reading and the whole recording's are settled apart: side by side.
+        let ((), settled) = rayon::join(
+            || {
+                if let (Some((train_problem, train_terms)), Some(train_findings)) = (train.as_mut(), train_findings.as_mut())
+                    && let Some((base, base_findings, replayed)) = replay.base_replayed(train_problem, train_terms, at, r)
+                    && !shows_in_motion(rules, replay.score(&held, &[d]), replay.score(&replayed, &[d]))
+                {
+                    held = replayed;
+                    *train_terms = base;
+                    *train_findings = base_findings;
+                }
+            },
+            || settle_whole_refinement(replay, (&*problem, &*terms, &*findings), at, &mut whole_held, rules, (r, d)),
         );
-        found.overruled.push((r, term, line));
+        if let Some(settled) = settled {
+            *findings = settled.findings;
+            *terms = settled.terms;
+            overruled.push(settled.overruled);
+        }
     }
     held
+}
+
+/// A reading with a refinement of dry friction replaced by its base law
+/// ([`settle_whole_refinement`]).
+struct BaseReading {
+    terms: Terms,
+    findings: Vec<JointFinding>,
+    /// The row, the term overruled and why ([`Identified::overruled`]).
+    overruled: (usize, String, String),
+}
+
+/// The whole recording's reading `(problem, terms, findings)` of row r (chain dof d) with its
+/// refinement of dry friction replaced by the base law, where the held-out replay does not show
+/// the refinement ([`shows_in_motion`]); `whole_held` is the replay of the findings kept (made
+/// when first needed).
+fn settle_whole_refinement(
+    replay: &HeldOutReplay<'_>,
+    (problem, terms, findings): (&EffortProblem<'_>, &Terms, &[JointFinding]),
+    at: (&[Vec<FoundStop>], &Signals, f64),
+    whole_held: &mut Option<Vec<Vec<f64>>>,
+    rules: &SelectionRules,
+    (r, d): (usize, usize),
+) -> Option<BaseReading> {
+    let refined = findings[r].effects.iter().find(|e| matches!(e.kind, EffectKind::StribeckFriction | EffectKind::CoulombFriction))?;
+    let (term, what) = if refined.kind == EffectKind::StribeckFriction {
+        (refined.kind.name().to_string(), "a Stribeck law")
+    } else {
+        (format!("{} with friction_reverse", refined.kind.name()), "friction that differs by direction")
+    };
+    let (base, base_findings, replayed) = replay.base_replayed(problem, terms, at, r)?;
+    let (_, sig, horizon_s) = at;
+    let whole = whole_held.get_or_insert_with(|| replay.replay(findings, sig, horizon_s));
+    let (with_it, without_it) = (replay.score(whole, &[d]), replay.score(&replayed, &[d]));
+    if shows_in_motion(rules, with_it, without_it) {
+        return None;
+    }
+    *whole_held = Some(replayed);
+    let line = format!(
+        "{term}: effort space read the joint's dry friction as {what}, but its base law replays the held-out part {} \
+         ({without_it:.2e} against {with_it:.2e} relative to the model as written): the motion does not show the refinement",
+        if without_it <= with_it { "as well or better" } else { "hardly worse" },
+    );
+    Some(BaseReading { terms: base, findings: base_findings, overruled: (r, term, line) })
 }
 
 /// A term of a chain joint whose effort has the shape of the model's own rigid-body error (an
