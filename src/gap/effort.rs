@@ -736,11 +736,24 @@ pub struct EffortProblem<'a> {
     bordered_fits: Mutex<HashMap<BorderedKey, Option<Arc<BlockFit>>>>,
     /// Sizes of terms already measured ([`Self::change_rms`]).
     change_sizes: Mutex<HashMap<ChangeKey, f64>>,
+    /// Forward steps already weighed, per chosen set and kind of step ([`Self::best_step`]).
+    steps: Mutex<HashMap<StepKey, Arc<WeighedStep>>>,
     /// The columns of the model's own first-moment error, in every fit ([`super::accuracy`]),
     /// each with its body, the axis of the body's frame, and the row that owns the body (its
     /// nearest identified joint).
     nuisance: BTreeMap<usize, (usize, usize, usize)>,
 }
+
+/// The candidates that passed in one forward step and their gains, in candidate order, with the
+/// bans they were weighed under ([`EffortProblem::best_step`]).
+#[derive(Debug)]
+struct WeighedStep {
+    banned: Vec<bool>,
+    passing: Vec<(usize, f64)>,
+}
+
+/// A forward step: the chosen set it starts from, and whether it weighs whole refinements.
+type StepKey = (Vec<usize>, bool);
 
 /// A block fitted by extension: its base's columns, its new columns, the rows it scores.
 type BorderedKey = (Vec<usize>, Vec<usize>, Vec<usize>);
@@ -1052,6 +1065,7 @@ impl<'a> EffortProblem<'a> {
             factors: Mutex::new(HashMap::new()),
             bordered_fits: Mutex::new(HashMap::new()),
             change_sizes: Mutex::new(HashMap::new()),
+            steps: Mutex::new(HashMap::new()),
             nuisance: BTreeMap::new(),
         };
         problem.fold_of = problem.assign_folds(sig);
@@ -2396,10 +2410,44 @@ impl EffortProblem<'_> {
     /// The candidate not `banned` that passes and cuts the held-out error most against
     /// `current`: among those that may enter ([`Self::may_enter`]), or, with `whole_refinements`,
     /// among the refinements that may not (their family absent from the joint).
+    ///
+    /// `current` is the evaluation of `chosen` (as [`Self::forward`] and [`Self::prune`] keep
+    /// it), so a step is determined by `chosen`, the kind of step and the bans. [`Self::select`]
+    /// runs forward selection again with more bans, through the same sets until it departs from
+    /// the earlier run: a step weighed under fewer bans is not weighed again, its passing
+    /// candidates less the newly banned ones are what weighing them again would pass (each
+    /// candidate's verdict depends on the set alone), and the tie-break runs over them afresh.
     fn best_step(&self, chosen: &[usize], current: &Evaluation, banned: &[bool], whole_refinements: bool) -> Option<(usize, Evaluation)> {
+        let key = (chosen.to_vec(), whole_refinements);
+        let weighed = self.steps.lock().ok().and_then(|steps| steps.get(&key).cloned());
+        let passing: Vec<(usize, f64)> = match weighed {
+            Some(w) if w.banned.iter().zip(banned).all(|(&then, &now)| now || !then) => {
+                w.passing.iter().copied().filter(|&(c, _)| !banned[c]).collect()
+            }
+            _ => {
+                let passing = self.passing_steps(chosen, current, banned, whole_refinements);
+                if let Ok(mut steps) = self.steps.lock() {
+                    steps.insert(key, Arc::new(WeighedStep { banned: banned.to_vec(), passing: passing.clone() }));
+                }
+                passing
+            }
+        };
+        let mut best: Option<(usize, f64)> = None;
+        for (c, gain) in passing {
+            // Ties (look-alike kinds) go to the earlier candidate.
+            if best.is_none_or(|(_, best_gain)| gain > best_gain * 1.001 + 1e-12) {
+                best = Some((c, gain));
+            }
+        }
+        best.map(|(c, _)| (c, self.evaluate(&self.with(chosen, c))))
+    }
+
+    /// The candidates not `banned` that may take the step of [`Self::best_step`] and pass, with
+    /// their gains, in candidate order.
+    fn passing_steps(&self, chosen: &[usize], current: &Evaluation, banned: &[bool], whole_refinements: bool) -> Vec<(usize, f64)> {
         // The candidates are weighed in parallel (each fit depends on its set alone; the caches
         // hold what the set's key determines), then taken in candidate order.
-        let passing: Vec<(usize, Verdict)> = (0..banned.len())
+        (0..banned.len())
             .into_par_iter()
             // An unresolved law never passes (`plausible`): not worth its evaluation.
             .filter(|&c| {
@@ -2415,17 +2463,9 @@ impl EffortProblem<'_> {
                     return None;
                 }
                 let v = self.verdict(current, &e, &rows, c, self.family_member(chosen, c));
-                self.passes(&v).then_some((c, v))
+                self.passes(&v).then_some((c, v.gain))
             })
-            .collect();
-        let mut best: Option<(usize, Verdict)> = None;
-        for (c, v) in passing {
-            // Ties (look-alike kinds) go to the earlier candidate.
-            if best.as_ref().is_none_or(|(_, bv)| v.gain > bv.gain * 1.001 + 1e-12) {
-                best = Some((c, v));
-            }
-        }
-        best.map(|(c, _)| (c, self.evaluate(&self.with(chosen, c))))
+            .collect()
     }
 
     /// Whether candidate c may join `chosen`: a refinement enters only in place of its base law,
@@ -3126,6 +3166,29 @@ mod tests {
         let with_accuracy = two_link_problem(&model, &tree, SelectionRules::default());
         assert_eq!(with_accuracy.nuisance.len(), 4, "two axes of each link: along the joints' axis gravity does nothing");
         assert_eq!(with_accuracy.blocks_of(&with_accuracy.columns_of(&apart)).len(), 1);
+    }
+
+    /// Forward selection run again with more bans (as [`EffortProblem::select`] does) reuses
+    /// the steps the earlier run weighed through the sets both pass; the terms are those a
+    /// problem that never ran the earlier selection chooses under the same bans. Here the ban
+    /// is the term the first step chose: the reused step takes the next best from what passed.
+    #[test]
+    fn a_step_weighed_under_fewer_bans_chooses_as_weighing_it_again_would() {
+        let model = two_link_model();
+        let (tree, _) = model.multibody().expect("tree");
+        let problem = || two_link_problem_noisy(&model, &tree, SelectionRules::default(), 0.05, 0.01);
+        let (earlier, fresh) = (problem(), problem());
+        let none = vec![false; earlier.candidates.len()];
+        let first = earlier.select_without(&none);
+        let entered = earlier.best_step(&[], &earlier.evaluate(&[]), &none, false).expect("a first step").0;
+        assert!(first.len() >= 2, "{first:?}");
+        let mut banned = none.clone();
+        banned[entered] = true;
+        let again = earlier.select_without(&banned);
+        let reused = earlier.steps.lock().expect("steps")[&(Vec::new(), false)].banned == none;
+        assert!(reused, "the first step was weighed again");
+        assert_eq!(again, fresh.select_without(&banned));
+        assert!(!again.contains(&entered));
     }
 
     /// The rows' Gram matrices are summed pair by pair over each fold's samples gathered apart
