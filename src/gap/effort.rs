@@ -937,6 +937,9 @@ fn rms(v: impl Iterator<Item = f64>) -> f64 {
 /// only in the samples they use, which [`EffortProblem::new`] masks; computed once, they are the
 /// same numbers as each reading's own.
 pub struct ModelReading {
+    /// The effort joints (model joint indices) it was made for: the readings' rows.
+    effort_joints: Vec<usize>,
+    gravity: DVec3,
     tree: MultiBody,
     /// Per effort joint: the bodies of its moving part.
     part_of: Vec<Vec<usize>>,
@@ -971,7 +974,7 @@ impl ModelReading {
             || model_efforts(model, &tree, sig, gravity, &bodies),
             || first_moment_columns(&tree, sig, gravity, &beyond, &dof_of, rules),
         );
-        Some(Self { tree, part_of, beyond, me, moments })
+        Some(Self { effort_joints: effort_joints.to_vec(), gravity, tree, part_of, beyond, me, moments })
     }
 }
 
@@ -1005,20 +1008,20 @@ fn first_moment_columns(
 }
 
 impl<'a> EffortProblem<'a> {
-    /// Sets up the rows (`effort_joints`: model joint indices with a recorded effort, those
-    /// `reading` was made for), the candidate columns and their Gram matrices. `excluded[row][i]`
-    /// marks samples in contact with a stop; `train`, the samples the reading may use.
+    /// Sets up the rows (the effort joints `reading` was made for over `sig`: model joint
+    /// indices with a recorded effort), the candidate columns and their Gram matrices.
+    /// `excluded[row][i]` marks samples in contact with a stop; `train`, the samples the reading
+    /// may use.
     #[must_use]
     pub fn new(
         model: &'a GapModel,
         sig: &Signals,
         reading: &ModelReading,
-        gravity: DVec3,
-        effort_joints: &[usize],
         excluded: &[Vec<bool>],
         train: &[bool],
         rules: SelectionRules,
     ) -> Option<Self> {
+        let (effort_joints, gravity) = (&reading.effort_joints, reading.gravity);
         let dofs = model.dofs();
         let n = sig.time_s.len();
         let me = &reading.me;
@@ -3089,7 +3092,7 @@ mod tests {
         let rows: Vec<usize> = model.dofs();
         let excluded = vec![vec![false; time_s.len()]; rows.len()];
         let reading = ModelReading::new(model, &sig, gravity, &rows, &rules).expect("reading");
-        EffortProblem::new(model, &sig, &reading, gravity, &rows, &excluded, &vec![true; time_s.len()], rules).expect("problem")
+        EffortProblem::new(model, &sig, &reading, &excluded, &vec![true; time_s.len()], rules).expect("problem")
     }
 
     /// [`EffortProblem::solve`] with its normal equations added up afresh from the rows' Gram

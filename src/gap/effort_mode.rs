@@ -287,7 +287,7 @@ fn identify_at<'a>(
     let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
     // The model's efforts are the same for every reading below: computed once.
     let reading = ModelReading::new(model, &sig, gravity, &rows, rules)?;
-    let first = EffortProblem::new(model, &sig, &reading, gravity, &rows, &excluded, &everything, rules.clone())?;
+    let first = EffortProblem::new(model, &sig, &reading, &excluded, &everything, rules.clone())?;
     let stops = unmodelled_stops(model, rec, positions, first.rows());
     for (r, found) in stops.iter().enumerate() {
         for stop in found {
@@ -300,14 +300,14 @@ fn identify_at<'a>(
             let problem = if stops.iter().all(Vec::is_empty) {
                 first
             } else {
-                EffortProblem::new(model, &sig, &reading, gravity, &rows, &excluded, &everything, rules.clone()).unwrap_or(first)
+                EffortProblem::new(model, &sig, &reading, &excluded, &everything, rules.clone()).unwrap_or(first)
             };
             let terms = problem.chosen_terms();
             let findings = findings_with_stops(&problem, &terms, &stops);
             (problem, terms, findings)
         },
         || {
-            let train = EffortProblem::new(model, &sig, &reading, gravity, &rows, &excluded, &train, rules.clone()).map(|p| {
+            let train = EffortProblem::new(model, &sig, &reading, &excluded, &train, rules.clone()).map(|p| {
                 let t = p.chosen_terms();
                 (p, t)
             });
