@@ -307,3 +307,27 @@ fn a_ros_recording_needs_a_model_and_a_rosbag2_in_another_storage_is_named() {
         "{err}"
     );
 }
+
+/// `partscene render` from the command line, without a window (lavapipe where there is no GPU): the
+/// demo room reconstructed and drawn to a PNG of the size asked, not one flat colour. Without an
+/// adapter it skips loudly, except under CI (`CI` set), which installs lavapipe.
+#[cfg(feature = "gui")]
+#[test]
+fn render_draws_the_demo_room_to_a_png_headless() {
+    if let Err(e) = partscene::render::Headless::new() {
+        assert!(std::env::var_os("CI").is_none(), "CI must have a GPU adapter (lavapipe): {e}");
+        eprintln!("\n!!! SKIPPING render_draws_the_demo_room_to_a_png_headless: {e}\n");
+        return;
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("shot.png");
+    let o = partscene(&["render", "demo", "--out", out.to_str().expect("utf-8"), "--width", "160", "--height", "100", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).expect("--json prints JSON");
+    assert_eq!((report["width"].as_u64(), report["height"].as_u64()), (Some(160), Some(100)), "{report}");
+    let image = image::open(&out).expect("the PNG reads back").to_rgba8();
+    assert_eq!(image.dimensions(), (160, 100));
+    let first = image.get_pixel(0, 0);
+    let differing = image.pixels().filter(|p| *p != first).count();
+    assert!(differing > 160 * 100 / 10, "the shot is nearly one colour: {differing} pixels differ from the corner");
+}
