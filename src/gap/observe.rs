@@ -30,6 +30,16 @@ pub fn observed_positions(model: &GapModel, rec: &Recording) -> Result<Observed,
             continue;
         }
         let mut q = rec.joint_q.get(&joint.name).cloned().unwrap_or_else(|| vec![f64::NAN; n]);
+        if joint.kind.is_rotational() {
+            let turns = unwrap_turns(&mut q);
+            if turns > 0 {
+                notes.push(format!(
+                    "{}.q: the reading jumps by more than π between samples {turns} times: read as the same angle wrapped \
+                     round a full turn (a logger that keeps angles within one turn) and unwrapped",
+                    joint.name
+                ));
+            }
+        }
         let stale = drop_stale_readings(&mut q);
         if stale > 0 {
             notes.push(format!(
@@ -58,6 +68,33 @@ pub fn observed_positions(model: &GapModel, rec: &Recording) -> Result<Observed,
         }
     }
     Ok(Observed { positions: observed, notes })
+}
+
+/// Unwraps an angle logged within one turn (ROS drivers and encoders that report a continuous
+/// joint in (−π, π] or [0, 2π)): wherever the reading jumps by more than π from the finite one
+/// before it, the rest of the record is moved by the whole turns that bring the jump within π
+/// (`numpy.unwrap`'s rule). No joint turns by half a turn between two samples of a recording
+/// that resolves its motion, so such a jump is a wrap, not motion. Returns how many jumps were
+/// unwrapped.
+fn unwrap_turns(q: &mut [f64]) -> usize {
+    let tau = std::f64::consts::TAU;
+    let (mut shift, mut previous_raw, mut count) = (0.0, None::<f64>, 0);
+    for v in q.iter_mut().filter(|v| v.is_finite()) {
+        let raw = *v;
+        if let Some(p) = previous_raw {
+            let jump = raw - p;
+            if jump.abs() > std::f64::consts::PI {
+                shift -= (jump / tau).round() * tau;
+                count += 1;
+            }
+        }
+        previous_raw = Some(raw);
+        // Untouched until the first wrap, to the bit (−0 + 0 would be +0).
+        if shift != 0.0 {
+            *v = raw + shift;
+        }
+    }
+    count
 }
 
 /// Steps of a position's resolution (its smallest change between samples) beyond which the
@@ -255,6 +292,34 @@ mod tests {
         let count = drop_stale_readings(&mut v);
         let got: Vec<usize> = (0..v.len()).filter(|&i| v[i].is_nan() && q[i].is_finite()).collect();
         assert_eq!((got.as_slice(), count), (expected, expected.len()), "{q:?}");
+    }
+
+    #[test]
+    fn an_angle_logged_within_one_turn_is_unwrapped_and_a_real_swing_is_not() {
+        // A joint turning steadily through 7 rad, logged in (−π, π] and in [0, 2π), with a dropout
+        // across one wrap: both read back as the turn, to rounding.
+        let tau = std::f64::consts::TAU;
+        let turn: Vec<f64> = (0..50).map(|i| -3.0 + 0.14 * f64::from(i)).collect();
+        for wrapped in [
+            turn.iter().map(|x| (x + std::f64::consts::PI).rem_euclid(tau) - std::f64::consts::PI).collect::<Vec<_>>(),
+            turn.iter().map(|x| x.rem_euclid(tau)).collect(),
+        ] {
+            let mut q = wrapped.clone();
+            q[22] = f64::NAN;
+            let count = unwrap_turns(&mut q);
+            assert!(count >= 1, "{wrapped:?}");
+            let offset = q[0] - turn[0];
+            assert!((offset / tau - (offset / tau).round()).abs() < 1e-9, "a whole number of turns: {offset}");
+            for (i, (&got, &want)) in q.iter().zip(&turn).enumerate().filter(|(i, _)| *i != 22) {
+                assert!((got - offset - want).abs() < 1e-9, "sample {i}: {got} against {want}");
+            }
+            assert!(q[22].is_nan());
+        }
+        // A swing that stays within half a turn per sample is left as it is, bit for bit.
+        let swing: Vec<f64> = (0..200).map(|i| 3.0 * (0.05 * f64::from(i)).sin()).collect();
+        let mut q = swing.clone();
+        assert_eq!(unwrap_turns(&mut q), 0);
+        assert_eq!(q.iter().map(|x| x.to_bits()).collect::<Vec<_>>(), swing.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
     }
 
     #[test]
