@@ -11,6 +11,7 @@
 # Built without a sanitizer: the crate forbids unsafe code, and what is looked for (panics,
 # endless loops, huge allocations) libFuzzer catches by itself at two to three times the speed.
 # PARTSCENE_FUZZ_SEED=N fixes libFuzzer's seed (CI: 1, so a run can be repeated); 0 = random.
+# PARTSCENE_FUZZ_BUILD_ONLY=1 builds the targets and runs none.
 # PARTSCENE_FUZZ_SANITIZER=address builds with AddressSanitizer (for the unsafe code of
 # dependencies). The fuzz build has its own target dir (PARTSCENE_FUZZ_TARGET_DIR) so it never
 # waits on, or invalidates, the main build.
@@ -30,11 +31,17 @@ if [ "$#" -gt 0 ]; then
 else
   mapfile -t targets < <(cargo +nightly fuzz list)
 fi
+flags=(--sanitizer "$sanitizer" --target-dir "$target_dir")
+# PARTSCENE_FUZZ_BUILD_ONLY=1: the targets built, nothing run (CI builds them in the background
+# while it does other work; the run later finds the build done).
+if [ -n "${PARTSCENE_FUZZ_BUILD_ONLY:-}" ]; then
+  cargo +nightly fuzz build "${flags[@]}"
+  exit 0
+fi
 if [ ! -d fuzz/corpus ]; then
   fuzz/seed.sh fuzz/corpus
 fi
 
-flags=(--sanitizer "$sanitizer" --target-dir "$target_dir")
 cargo +nightly fuzz build "${flags[@]}"
 
 logs="$(mktemp -d /tmp/partscene-fuzz-logs.XXXXXX)"
