@@ -71,27 +71,25 @@ pub fn observed_positions(model: &GapModel, rec: &Recording) -> Result<Observed,
 }
 
 /// Unwraps an angle logged within one turn (ROS drivers and encoders that report a continuous
-/// joint in (−π, π] or [0, 2π)): wherever the reading jumps by more than π from the finite one
-/// before it, the rest of the record is moved by the whole turns that bring the jump within π
-/// (`numpy.unwrap`'s rule). No joint turns by half a turn between two samples of a recording
-/// that resolves its motion, so such a jump is a wrap, not motion. Returns how many jumps were
-/// unwrapped.
+/// joint in (−π, π] or [0, 2π)): each finite reading is taken at the turn nearest the one before
+/// it ([`unwrap_near`], as tracked poses are), so wherever the reading jumps by more than π the
+/// rest of the record moves by whole turns (`numpy.unwrap`'s rule). No joint turns by half a turn
+/// between two samples of a recording that resolves its motion, so such a jump is a wrap, not
+/// motion. Returns how many jumps were unwrapped.
 fn unwrap_turns(q: &mut [f64]) -> usize {
-    let tau = std::f64::consts::TAU;
-    let (mut shift, mut previous_raw, mut count) = (0.0, None::<f64>, 0);
+    // The reading before, as logged and as unwrapped.
+    let (mut previous, mut count) = (None::<(f64, f64)>, 0);
     for v in q.iter_mut().filter(|v| v.is_finite()) {
         let raw = *v;
-        if let Some(p) = previous_raw {
-            let jump = raw - p;
-            if jump.abs() > std::f64::consts::PI {
-                shift -= (jump / tau).round() * tau;
-                count += 1;
-            }
+        let unwrapped = unwrap_near(raw, previous.map(|(_, u)| u));
+        if previous.is_some_and(|(p, _)| (raw - p).abs() > std::f64::consts::PI) {
+            count += 1;
         }
-        previous_raw = Some(raw);
-        // Untouched until the first wrap, to the bit (−0 + 0 would be +0).
-        if shift != 0.0 {
-            *v = raw + shift;
+        previous = Some((raw, unwrapped));
+        // Untouched where no turn is added, to the bit (−0 + 0 would be +0): an exact test.
+        #[allow(clippy::float_cmp)]
+        if unwrapped != raw {
+            *v = unwrapped;
         }
     }
     count
