@@ -7,6 +7,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use rand::{Rng, SeedableRng};
+
 use partscene::gap::generate::{GenerateConfig, TrueEffect, generate_recording};
 use partscene::gap::{GapConfig, GapError, GapModel, analyze, parse_model, parse_recording, write_outputs};
 
@@ -647,6 +649,29 @@ fn simulated_double_pendulum_csv(
     load: (f64, f64),
     drive: Option<(f64, f64)>,
 ) -> String {
+    logged_double_pendulum_csv(q1, q2, duration_s, friction, load, drive, Log { rate_hz: 200, q_step: None, stamp_jitter_s: 0.0 })
+}
+
+/// How a run is logged: its rate, the step its positions are rounded to (an encoder's or a
+/// logger's resolution; None: 9 decimals), and how far each time stamp may lie from the instant
+/// the sample was taken (a logger's clock; seeded, uniform).
+#[derive(Clone, Copy)]
+struct Log {
+    rate_hz: u32,
+    q_step: Option<f64>,
+    stamp_jitter_s: f64,
+}
+
+/// [`simulated_double_pendulum_csv`] logged as `log` says.
+fn logged_double_pendulum_csv(
+    q1: f64,
+    q2: f64,
+    duration_s: f64,
+    friction: [f64; 2],
+    load: (f64, f64),
+    drive: Option<(f64, f64)>,
+    log: Log,
+) -> String {
     let (m1, r1, ic1, l1, r2, g) = (0.6, 0.17, 0.004, 0.2, 0.28, 9.81);
     let (m2, ic2) = (0.65 + load.0, 0.0034 + load.1);
     let (i1, i2) = (ic1 + m1 * r1 * r1, ic2 + m2 * r2 * r2);
@@ -667,16 +692,20 @@ fn simulated_double_pendulum_csv(
     let h = 1e-4;
     let mut csv =
         String::from(if drive.is_some() { "time,shoulder.q,elbow.q,shoulder.effort,elbow.effort\n" } else { "time,shoulder.q,elbow.q\n" });
-    let samples = (duration_s * 200.0).round() as usize;
+    let rate = f64::from(log.rate_hz);
+    let samples = (duration_s * rate).round() as usize;
+    let logged = |q: f64| log.q_step.map_or(q, |step| (q / step).round() * step);
+    let mut clock = rand_chacha::ChaCha8Rng::seed_from_u64(7);
     for i in 0..=samples {
-        let t0 = i as f64 / 200.0;
-        write!(csv, "{t0:.4},{:.9},{:.9}", s[0], s[1]).expect("writes to a string");
+        let t0 = i as f64 / rate;
+        let stamp = t0 + log.stamp_jitter_s * (2.0 * clock.random::<f64>() - 1.0);
+        write!(csv, "{stamp:.6},{:.9},{:.9}", logged(s[0]), logged(s[1])).expect("writes to a string");
         if let Some(d) = drive {
             let u = drive_torques(d, t0);
             write!(csv, ",{:.9},{:.9}", u[0], u[1]).expect("writes to a string");
         }
         csv.push('\n');
-        for step in 0..50 {
+        for step in 0..(10_000 / log.rate_hz) {
             let t = t0 + f64::from(step) * h;
             let add = |x: [f64; 4], k: [f64; 4], f: f64| [x[0] + f * k[0], x[1] + f * k[1], x[2] + f * k[2], x[3] + f * k[3]];
             let k1 = accel(s, t);
@@ -1096,6 +1125,31 @@ fn a_chain_with_dry_friction_keeps_it_through_the_replay_check() {
         let dry = report.effects.iter().find(|e| e.joint == joint && e.kind == "coulomb_friction");
         assert!(dry.is_some_and(|e| (e.params["friction"] - level).abs() < 0.25 * level), "{joint}: {found:?}");
         assert!(!report.effects.iter().any(|e| e.joint == joint && e.kind == "viscous_damping"), "{joint}: {found:?}");
+    }
+}
+
+/// Broke: a real Panda's 1 kHz log (positions to 10⁻⁴ rad, time stamps 0.7-1.8 ms apart) was
+/// differentiated over three samples, 3 ms, whose noise friction's sign of the speed and the
+/// velocity products turn into effort: `unknown` of 0.8-1 N·m and no friction on the three
+/// proximal joints, where the same log taken at 200 Hz named friction on all seven. A driven
+/// double pendulum with dry friction at both joints, logged at 1 kHz with its positions rounded
+/// to 10⁻³ rad and its stamps up to 0.3 ms off (read that way: `unknown` on both joints, no
+/// friction), reads as logged at 200 Hz: dry friction at both joints (levels within 25 %),
+/// nothing else.
+#[test]
+fn a_fast_log_of_coarse_positions_reads_as_a_slower_one() {
+    let model = parse_model(DOUBLE_PENDULUM, Path::new("double_pendulum.urdf")).expect("model parses");
+    for rate_hz in [200, 1000] {
+        let log = Log { rate_hz, q_step: Some(1e-3), stamp_jitter_s: 3e-4 };
+        let csv = logged_double_pendulum_csv(0.3, -0.2, 10.0, [0.1, 0.05], (0.0, 0.0), Some((0.6, 0.3)), log);
+        let rec = parse_recording(&csv, Path::new("logged.csv")).expect("parses");
+        let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+        let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
+        assert_eq!(report.effects.len(), 2, "{rate_hz} Hz: {found:?}");
+        for (joint, level) in [("shoulder", 0.1), ("elbow", 0.05)] {
+            let dry = report.effects.iter().find(|e| e.joint == joint && e.kind == "coulomb_friction");
+            assert!(dry.is_some_and(|e| (e.params["friction"] - level).abs() < 0.25 * level), "{rate_hz} Hz, {joint}: {found:?}");
+        }
     }
 }
 

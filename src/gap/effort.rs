@@ -220,7 +220,7 @@ impl Bandwidth {
 pub fn bandwidth(time_s: &[f64], positions: &[Vec<f64>], first_pass_s: f64, cutoff_over_motion: f64) -> Bandwidth {
     let n = time_s.len();
     let dt = if n > 1 { ((time_s[n - 1] - time_s[0]) / (n - 1) as f64).max(1e-9) } else { 0.01 };
-    let narrow_s = DIFFERENTIATOR_SAMPLES * dt;
+    let narrow = |sigma_s: f64| (DIFFERENTIATOR_SAMPLES * dt).max(DIFFERENTIATOR_OVER_SIGMA * sigma_s);
     let mut f_motion: f64 = 0.0;
     if n >= 3 {
         for y in positions {
@@ -241,7 +241,8 @@ pub fn bandwidth(time_s: &[f64], positions: &[Vec<f64>], first_pass_s: f64, cuto
         }
     }
     if f_motion <= 0.0 {
-        return Bandwidth { motion_hz: 0.0, half_width_s: first_pass_s, sigma_s: (first_pass_s / 2.0).max(1.5 * dt), narrow_s };
+        let sigma_s = (first_pass_s / 2.0).max(1.5 * dt);
+        return Bandwidth { motion_hz: 0.0, half_width_s: first_pass_s, sigma_s, narrow_s: narrow(sigma_s) };
     }
     let f_nyquist = 0.5 / dt;
     let f_cut = (CUTOFF_OVER_MOTION * f_motion).min(0.5 * f_nyquist);
@@ -249,11 +250,22 @@ pub fn bandwidth(time_s: &[f64], positions: &[Vec<f64>], first_pass_s: f64, cuto
     let half_width_s = (half_samples * dt).clamp(3.0 * dt, MAX_HALF_WIDTH_S.max(3.0 * dt));
     let f_equation = (cutoff_over_motion * f_motion).min(0.5 * f_nyquist);
     let sigma_s = (GAUSS_HALF_GAIN_F_SIGMA / f_equation).clamp(1.5 * dt, MAX_SIGMA_S.max(1.5 * dt));
-    Bandwidth { motion_hz: f_motion, half_width_s, sigma_s, narrow_s }
+    Bandwidth { motion_hz: f_motion, half_width_s, sigma_s, narrow_s: narrow(sigma_s) }
 }
 
-/// Half-width of the differentiator of the raw positions, in samples.
+/// Least half-width of the differentiator of the raw positions, in samples.
 const DIFFERENTIATOR_SAMPLES: f64 = 3.0;
+
+/// Least half-width of the differentiator of the raw positions, as a share of the parallel
+/// filter's σ. A local cubic of half-width h passes up to about 0.6/h Hz; at σ/4 that is 13× the
+/// filter's half-gain frequency (0.19/σ), so the differentiator leaves the band the filter
+/// passes as it is, and removes only noise the filter would remove anyway, but for the terms
+/// nonlinear in the motion: friction's sign of the speed and the velocity products rectify a
+/// differentiator's noise into effort the filter cannot take out. Three samples of a 1 kHz log
+/// are 3 ms: a real Panda's 1 kHz log (positions to 10⁻⁴ rad) read that way had `unknown` of
+/// 0.8-1 N·m on its three proximal joints and no friction there, where the same log at 200 Hz
+/// (three samples: 15 ms) named friction on all seven.
+const DIFFERENTIATOR_OVER_SIGMA: f64 = 0.25;
 
 /// The signals of the equation of motion, filtered in parallel (Gautier's IDIM practice): the
 /// positions are differentiated by a narrow local cubic, every term of the equation (the model's
