@@ -29,7 +29,7 @@ const MIN_FREE_SHARE: f64 = 0.2;
 
 /// Half-gain frequencies of the parallel filter tried, as multiples of the motion's dominant
 /// frequency, widest first ([`analyze_effort_space`]).
-const EQUATION_BANDS: [f64; 2] = [5.0, 2.5];
+pub(super) const EQUATION_BANDS: [f64; 2] = [5.0, 2.5];
 
 /// Per identified joint: samples in contact with a modelled stop, from the measured positions
 /// (within [`CONTACT_SHARE`] of the travel or four noise σ of the limit, and a turning point

@@ -247,6 +247,23 @@ pub fn fill_gaps(values: &[f64]) -> Vec<f64> {
     out
 }
 
+/// A position read at every `step`-th sample of a faster log ([`super::Recording::every`]): the
+/// mean of the finite readings within ±`step`/2 samples of it (a moving average centred on the
+/// sample, so that it lags nothing, and averages the readings the working rate leaves out); NaN
+/// where none is finite.
+#[must_use]
+pub fn centred_means(values: &[f64], step: usize) -> Vec<f64> {
+    let (step, n) = (step.max(1), values.len());
+    (0..n)
+        .step_by(step)
+        .map(|i| {
+            let window = &values[i.saturating_sub(step / 2)..(i + step / 2 + 1).min(n)];
+            let (sum, count) = window.iter().filter(|v| v.is_finite()).fold((0.0, 0usize), |(s, c), v| (s + v, c + 1));
+            if count > 0 { sum / count as f64 } else { f64::NAN }
+        })
+        .collect()
+}
+
 /// Local quadratic fits over ±`half` valid neighbours: (position, velocity, acceleration) per
 /// sample, NaN where too few neighbours.
 #[must_use]
@@ -290,6 +307,16 @@ mod tests {
         let count = drop_stale_readings(&mut v);
         let got: Vec<usize> = (0..v.len()).filter(|&i| v[i].is_nan() && q[i].is_finite()).collect();
         assert_eq!((got.as_slice(), count), (expected, expected.len()), "{q:?}");
+    }
+
+    #[test]
+    fn a_position_read_at_a_working_rate_is_the_mean_around_its_sample() {
+        let q = [0.0, 1.0, 2.0, 3.0, f64::NAN, 5.0, 6.0, 7.0, f64::NAN, f64::NAN, f64::NAN];
+        let got = centred_means(&q, 4);
+        // Samples 0, 4 and 8: means over 0..=2, 2..=6 (the missing one skipped) and 6..=10.
+        let want = [1.0, 4.0, 6.5];
+        assert!(got.len() == want.len() && got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-12), "{got:?}");
+        assert!(centred_means(&[f64::NAN; 3], 2).iter().all(|v| v.is_nan()));
     }
 
     #[test]

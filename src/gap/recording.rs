@@ -313,11 +313,68 @@ impl Recording {
     pub fn effort(&self, joint: &str, i: usize) -> f64 {
         self.joint_effort.get(joint).and_then(|v| v.get(i)).copied().unwrap_or(0.0)
     }
+
+    /// The recording read at every `step`-th sample (the first, then every `step`-th after it):
+    /// positions and poses as measured at those samples; each effort, which holds until the next
+    /// sample (spec §2), averaged over the holds its sample now stands for, weighed by their
+    /// durations, so that the impulse it applies until the next sample kept is the one the
+    /// recording applied (the last sample's hold taken as the median step).
+    #[must_use]
+    pub fn every(&self, step: usize) -> Self {
+        let step = step.max(1);
+        let n = self.time_s.len();
+        let kept: Vec<usize> = (0..n).step_by(step).collect();
+        let pick = |v: &Vec<f64>| kept.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+        let mut steps: Vec<f64> = self.time_s.windows(2).map(|w| w[1] - w[0]).collect();
+        steps.sort_by(f64::total_cmp);
+        let last_hold = steps.get(steps.len() / 2).copied().unwrap_or(0.0);
+        let hold = |i: usize| if i + 1 < n { self.time_s[i + 1] - self.time_s[i] } else { last_hold };
+        let average = |v: &Vec<f64>| -> Vec<f64> {
+            kept.iter()
+                .map(|&a| {
+                    let b = (a + step).min(n);
+                    let (impulse, duration) = (a..b).fold((0.0, 0.0), |(s, d), i| (s + v[i] * hold(i), d + hold(i)));
+                    if duration > 0.0 { impulse / duration } else { v[a] }
+                })
+                .collect()
+        };
+        let links = self
+            .links
+            .iter()
+            .map(|(name, track)| {
+                let position_m = track.position_m.as_ref().map(|p| [pick(&p[0]), pick(&p[1]), pick(&p[2])]);
+                let quaternion = track.quaternion.as_ref().map(|q| [pick(&q[0]), pick(&q[1]), pick(&q[2]), pick(&q[3])]);
+                (name.clone(), LinkTrack { position_m, quaternion })
+            })
+            .collect();
+        Self {
+            file: self.file.clone(),
+            metadata: self.metadata.clone(),
+            gravity_mps2: self.gravity_mps2,
+            time_s: pick(&self.time_s),
+            joint_q: self.joint_q.iter().map(|(j, q)| (j.clone(), pick(q))).collect(),
+            joint_effort: self.joint_effort.iter().map(|(j, e)| (j.clone(), average(e))).collect(),
+            links,
+            header_line: self.header_line,
+            columns: self.columns.clone(),
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_log_read_at_every_third_sample_keeps_each_efforts_impulse() {
+        let text = "time,arm.q,arm.effort\n0,0,1\n0.001,0.1,2\n0.003,0.2,3\n0.004,0.3,4\n0.005,0.4,5\n";
+        let r = parse_recording(text, Path::new("fast.csv")).expect("parses").every(3);
+        assert_eq!(r.time_s, vec![0.0, 0.004]);
+        assert_eq!(r.joint_q["arm"], vec![0.0, 0.3]);
+        // Holds of 1, 2 and 1 ms: (1·1 + 2·2 + 3·1) / 4; then 1 ms each, the last the median step.
+        let e = &r.joint_effort["arm"];
+        assert!((e[0] - 2.0).abs() < 1e-12 && (e[1] - 4.5).abs() < 1e-12, "{e:?}");
+    }
 
     #[test]
     fn reads_metadata_dropouts_and_columns_in_any_order() {
