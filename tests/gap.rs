@@ -630,26 +630,13 @@ fn double_pendulum_csv(q1: f64, q2: f64, duration_s: f64, friction: [f64; 2]) ->
 /// [`double_pendulum_csv`] with a load of (mass kg, inertia kg·m² about its centre) carried
 /// rigidly at the lower link's centre of mass.
 fn double_pendulum_with_load_csv(q1: f64, q2: f64, duration_s: f64, friction: [f64; 2], load: (f64, f64)) -> String {
-    simulated_double_pendulum_csv(q1, q2, duration_s, friction, load, None)
+    logged_double_pendulum_csv(q1, q2, duration_s, friction, load, None, Log::AT_200_HZ)
 }
 
-/// The motor torques of [`simulated_double_pendulum_csv`]'s driven runs, N·m at time `t` s: two
+/// The motor torques of [`logged_double_pendulum_csv`]'s driven runs, N·m at time `t` s: two
 /// incommensurate sines per joint of amplitudes `drive`.
 fn drive_torques(drive: (f64, f64), t: f64) -> [f64; 2] {
     [drive.0 * ((2.1 * t).sin() + 0.5 * (5.3 * t + 1.0).sin()), drive.1 * ((3.7 * t + 0.5).sin() + 0.4 * (7.1 * t).sin())]
-}
-
-/// [`double_pendulum_with_load_csv`], driven by [`drive_torques`] (recorded as efforts) where
-/// `drive` is given.
-fn simulated_double_pendulum_csv(
-    q1: f64,
-    q2: f64,
-    duration_s: f64,
-    friction: [f64; 2],
-    load: (f64, f64),
-    drive: Option<(f64, f64)>,
-) -> String {
-    logged_double_pendulum_csv(q1, q2, duration_s, friction, load, drive, Log { rate_hz: 200, q_step: None, stamp_jitter_s: 0.0 })
 }
 
 /// How a run is logged: its rate, the step its positions are rounded to (an encoder's or a
@@ -662,7 +649,13 @@ struct Log {
     stamp_jitter_s: f64,
 }
 
-/// [`simulated_double_pendulum_csv`] logged as `log` says.
+impl Log {
+    /// 200 Hz, 9 decimals, exact stamps.
+    const AT_200_HZ: Self = Self { rate_hz: 200, q_step: None, stamp_jitter_s: 0.0 };
+}
+
+/// [`double_pendulum_with_load_csv`], driven by [`drive_torques`] (recorded as efforts) where
+/// `drive` is given, logged as `log` says.
 fn logged_double_pendulum_csv(
     q1: f64,
     q2: f64,
@@ -952,7 +945,7 @@ fn a_real_double_pendulums_rotor_inertia_survives_the_replay_check() {
 #[test]
 fn a_link_a_few_percent_off_its_model_is_not_named_a_rotor() {
     let model = parse_model(DOUBLE_PENDULUM, Path::new("double_pendulum.urdf")).expect("model parses");
-    let csv = simulated_double_pendulum_csv(0.6, -0.4, 10.0, [0.0, 0.0], (0.03, 0.0015), Some((0.6, 0.3)));
+    let csv = logged_double_pendulum_csv(0.6, -0.4, 10.0, [0.0, 0.0], (0.03, 0.0015), Some((0.6, 0.3)), Log::AT_200_HZ);
     let rec = parse_recording(&csv, Path::new("heavier_link.csv")).expect("parses");
     let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
     assert!(report.effects.is_empty(), "within the model's accuracy: {:?}", report.effects);
