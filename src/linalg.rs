@@ -96,9 +96,87 @@ pub fn inverse_spd(a: &[f64], n: usize) -> Option<Vec<f64>> {
     Some(inv)
 }
 
+/// The eigenvalues of a symmetric matrix (row-major n×n), ascending: cyclic Jacobi rotations
+/// until the off-diagonal is negligible against the diagonal (a few sweeps at these sizes).
+#[must_use]
+pub fn symmetric_eigenvalues(a: &[f64], n: usize) -> Vec<f64> {
+    let mut a = a.to_vec();
+    for _ in 0..64 {
+        let off: f64 = (0..n).flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j))).map(|(i, j)| a[i * n + j].powi(2)).sum();
+        let diag: f64 = (0..n).map(|i| a[i * n + i].powi(2)).sum();
+        if off <= 1e-30 * diag.max(1e-300) {
+            break;
+        }
+        for p in 0..n {
+            for q in p + 1..n {
+                let apq = a[p * n + q];
+                if apq == 0.0 {
+                    continue;
+                }
+                // The rotation that zeroes (p, q): tan of its angle, the smaller root of the
+                // textbook quadratic (1 where the two diagonal entries are equal).
+                let theta = (a[q * n + q] - a[p * n + p]) / (2.0 * apq);
+                let t = if theta >= 0.0 { 1.0 } else { -1.0 } / (theta.abs() + theta.hypot(1.0));
+                let c = 1.0 / t.hypot(1.0);
+                let s = t * c;
+                for k in 0..n {
+                    let (akp, akq) = (a[k * n + p], a[k * n + q]);
+                    a[k * n + p] = c * akp - s * akq;
+                    a[k * n + q] = s * akp + c * akq;
+                }
+                for k in 0..n {
+                    let (apk, aqk) = (a[p * n + k], a[q * n + k]);
+                    a[p * n + k] = c * apk - s * aqk;
+                    a[q * n + k] = s * apk + c * aqk;
+                }
+            }
+        }
+    }
+    let mut values: Vec<f64> = (0..n).map(|i| a[i * n + i]).collect();
+    values.sort_by(f64::total_cmp);
+    values
+}
+
+/// The eigenvalues μ of `k x = μ m x` (k symmetric, m symmetric positive definite; row-major
+/// n×n), ascending: those of `L⁻¹ k L⁻ᵀ` with `m = L Lᵀ`. None where m is not positive definite.
+#[must_use]
+pub fn generalized_eigenvalues(k: &[f64], m: &[f64], n: usize) -> Option<Vec<f64>> {
+    let l = cholesky(m, n)?;
+    // X = L⁻¹ k column by column, then L⁻¹ Xᵀ = L⁻¹ k L⁻ᵀ (k symmetric).
+    let mut x = vec![0.0; n * n];
+    let mut column = vec![0.0; n];
+    for c in 0..n {
+        column.iter_mut().enumerate().for_each(|(r, u)| *u = k[r * n + c]);
+        forward_substitute(&l, &mut column, n);
+        (0..n).for_each(|r| x[r * n + c] = column[r]);
+    }
+    let mut reduced = vec![0.0; n * n];
+    for c in 0..n {
+        column.iter_mut().enumerate().for_each(|(r, u)| *u = x[c * n + r]);
+        forward_substitute(&l, &mut column, n);
+        (0..n).for_each(|r| reduced[r * n + c] = column[r]);
+    }
+    // Symmetric up to rounding: its mean with its transpose.
+    let sym: Vec<f64> = (0..n * n).map(|i| 0.5 * (reduced[i] + reduced[(i % n) * n + i / n])).collect();
+    Some(symmetric_eigenvalues(&sym, n))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn eigenvalues_of_a_symmetric_and_a_generalized_problem() {
+        // [[2, 1, 0], [1, 2, 1], [0, 1, 2]]: 2 − √2, 2, 2 + √2.
+        let a = [2.0, 1.0, 0.0, 1.0, 2.0, 1.0, 0.0, 1.0, 2.0];
+        let r2 = 2f64.sqrt();
+        let got = symmetric_eigenvalues(&a, 3);
+        assert!(got.iter().zip([2.0 - r2, 2.0, 2.0 + r2]).all(|(g, w)| (g - w).abs() < 1e-12), "{got:?}");
+        // k x = μ m x with m = diag(1, 4): μ of [[1, 0], [0, −2]] are 1 and −0.5.
+        let got = generalized_eigenvalues(&[1.0, 0.0, 0.0, -2.0], &[1.0, 0.0, 0.0, 4.0], 2).expect("m is positive definite");
+        assert!(got.iter().zip([-0.5, 1.0]).all(|(g, w)| (g - w).abs() < 1e-12), "{got:?}");
+        assert!(generalized_eigenvalues(&[1.0], &[-1.0], 1).is_none());
+    }
 
     #[test]
     fn cholesky_solves() {

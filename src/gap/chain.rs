@@ -15,6 +15,7 @@ use glam::DVec3;
 use super::effects::JointPhysics;
 use super::sim::CONTACT_SUBSTEPS;
 use crate::dynamics::MultiBody;
+use crate::linalg::generalized_eigenvalues;
 
 /// Largest integration step, s.
 pub const MAX_STEP_S: f64 = 0.0005;
@@ -166,6 +167,36 @@ fn stop(p: &JointPhysics, q: &mut f64, v: &mut f64) {
     }
 }
 
+/// How fast gravity drives the tree away from configuration `q`, 1/s: linearised at rest,
+/// `M δq̈ = −K δq` with `K = ∂G/∂q` (the gravity efforts' stiffness, by finite differences), so
+/// errors grow as e^{λt} with λ² the largest eigenvalue of `−K` against `M`; 0 where every
+/// direction is stable (a hanging chain) or the mass matrix is singular. An arm held up by its
+/// controller against gravity diverges within a few tenths of a second when replayed open loop
+/// under its recorded efforts, whatever the model: a replay longer than that measures the
+/// divergence, not the model.
+#[must_use]
+pub fn instability_rate(tree: &MultiBody, q: &[f64], gravity: DVec3) -> f64 {
+    let n = q.len();
+    let zero = vec![0.0; n];
+    let at = |q: &[f64]| tree.inverse_dynamics(q, &zero, &zero, gravity);
+    let g0 = at(q);
+    let h = 1e-6;
+    let mut k = vec![0.0; n * n];
+    for j in 0..n {
+        let mut qj = q.to_vec();
+        qj[j] += h;
+        for (i, g) in at(&qj).into_iter().enumerate() {
+            k[i * n + j] = -(g - g0[i]) / h;
+        }
+    }
+    // −K is symmetric (the Hessian of the potential energy, negated) up to the differences'
+    // rounding.
+    let minus_k: Vec<f64> = (0..n * n).map(|i| 0.5 * (k[i] + k[(i % n) * n + i / n])).collect();
+    generalized_eigenvalues(&minus_k, &tree.mass_matrix(q), n)
+        .and_then(|mu| mu.last().copied())
+        .map_or(0.0, |mu| if mu.is_finite() { mu.max(0.0).sqrt() } else { 0.0 })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -191,5 +222,28 @@ mod tests {
         let speed = (q[0][1000] - q[0][900]) / 0.1;
         assert!((inside_s - 0.04).abs() <= 0.002, "inside {inside_s} s");
         assert!((speed + 0.6 * 0.3).abs() < 0.02 * 0.3, "left at {speed}");
+    }
+
+    #[test]
+    fn a_chain_held_up_diverges_at_its_pendulum_rate_and_a_hanging_one_does_not() {
+        // Two links on parallel axes, each 1 kg at 0.5 m down its 1 m link (point masses and a
+        // little inertia). Upright, the lower link straight above the upper: δq̈ = M⁻¹(−K)δq with
+        // M = [[2.5, 0.75], [0.75, 0.25]] + 0.01·[[2, 1], [1, 1]] and −K = g·[[2, 0.5], [0.5, 0.5]]
+        // (the potential's Hessian); hanging, −K is negated and nothing diverges.
+        let urdf = r#"<robot name="arm"><link name="base"/>
+          <link name="a"><inertial><origin xyz="0 0 -0.5"/><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+          <link name="b"><inertial><origin xyz="0 0 -0.5"/><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+          <joint name="shoulder" type="continuous"><parent link="base"/><child link="a"/><axis xyz="0 1 0"/></joint>
+          <joint name="elbow" type="continuous"><parent link="a"/><child link="b"/><origin xyz="0 0 -1"/><axis xyz="0 1 0"/></joint></robot>"#;
+        let model = parse_model(urdf, std::path::Path::new("arm.urdf")).expect("model");
+        let (tree, _) = model.multibody().expect("tree");
+        let g = 9.81;
+        let gravity = DVec3::new(0.0, 0.0, -g);
+        let m = [2.5 + 0.02, 0.75 + 0.01, 0.75 + 0.01, 0.25 + 0.01];
+        let minus_k = [2.0 * g, 0.5 * g, 0.5 * g, 0.5 * g];
+        let want = generalized_eigenvalues(&minus_k, &m, 2).expect("positive definite").last().copied().expect("two").sqrt();
+        let upright = instability_rate(&tree, &[std::f64::consts::PI, 0.0], gravity);
+        assert!((upright - want).abs() < 1e-4 * want, "{upright} against {want}");
+        assert!(instability_rate(&tree, &[0.0, 0.0], gravity) < 1e-3, "hanging");
     }
 }

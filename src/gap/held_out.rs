@@ -160,7 +160,7 @@ pub(super) fn replay_with_bounce(
 /// E-folds an open-loop replay of a mechanism that gravity drives away from where it is (a lid
 /// held open by a constant effort) may diverge over before it measures the divergence rather
 /// than the model.
-const HELD_OUT_E_FOLDS: f64 = 2.0;
+pub(super) const HELD_OUT_E_FOLDS: f64 = 2.0;
 
 /// Samples after a held-out piece's start on which its starting state is measured, seconds; they
 /// are not scored.
