@@ -213,7 +213,8 @@ fn findings_with_stops(problem: &EffortProblem<'_>, terms: &Terms, stops: &[Vec<
 /// held-out part (`train`), each problem with the terms it holds now.
 struct Identified<'a> {
     band: Bandwidth,
-    /// Length of the pieces the held-out part is replayed in ([`chain_horizon_s`]).
+    /// Length of the pieces the held-out part is replayed in: one period of the motion, and
+    /// once the tree is known ([`analyze_effort_space`]) no longer than [`chain_horizon_s`].
     horizon_s: f64,
     sig: Signals,
     rows: Vec<usize>,

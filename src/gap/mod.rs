@@ -114,8 +114,9 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
         }
     }
     let held_still = model.with_welded(&unobserved_leaves);
+    let effort_joints = effort_space_joints(&held_still, rec, &observed);
     let read_every;
-    let (rec, observed) = match at_working_rate(&held_still, rec, &observed) {
+    let (rec, observed) = match at_working_rate(&held_still, rec, &observed, &effort_joints) {
         Some((working, averaged, note)) => {
             read_every = working;
             notes.push(note);
@@ -126,7 +127,6 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     let n = rec.time_s.len();
     let gravity = DVec3::from_array(rec.gravity_mps2);
     let t_split = rec.time_s[0] + (1.0 - cfg.held_out_fraction) * (rec.time_s[n - 1] - rec.time_s[0]);
-    let effort_joints = effort_space_joints(&held_still, rec, &observed);
     let effort_mode::EffortOutcome { joints: mut outcomes, given, com_shift_m } = if effort_joints.is_empty() {
         effort_mode::EffortOutcome::default()
     } else {
@@ -167,11 +167,11 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     Ok(report)
 }
 
-/// A recording whose every observed joint is a chain joint of effort space, logged far faster
-/// than its motion needs, read at a working rate ([`effort::working_step`]): at every step-th
-/// sample, each position the mean of the readings around it as observed (stale readings already
-/// missing, angles unwrapped; [`observe::centred_means`]), each effort the mean over the holds it
-/// stands for ([`Recording::every`]); with the note that says so. A chain's identification costs
+/// A recording whose every observed joint is a chain joint of effort space (`effort_joints`),
+/// logged far faster than its motion needs, read at a working rate ([`effort::working_step`]):
+/// at every step-th sample, each position the mean of the readings around it as observed (stale
+/// readings already missing, angles unwrapped; [`observe::centred_means`]), each effort the mean
+/// over the holds it stands for ([`Recording::every`]); with the note that says so. A chain's identification costs
 /// its samples times its few hundred candidate columns, each through the parallel filter, and
 /// the filter's reach in samples grows with the rate too: a real Panda's 21 s at 1 kHz took
 /// 19.7 s, its 200 Hz rows 1.6 s, for the same findings. A joint alone on its body keeps every
@@ -181,8 +181,8 @@ fn at_working_rate(
     model: &GapModel,
     rec: &Recording,
     observed: &std::collections::BTreeMap<usize, Vec<f64>>,
+    effort_joints: &[usize],
 ) -> Option<(Recording, std::collections::BTreeMap<usize, Vec<f64>>, String)> {
-    let effort_joints = effort_space_joints(model, rec, observed);
     let chains_only = !effort_joints.is_empty()
         && observed.keys().all(|j| effort_joints.contains(j))
         && effort_joints.iter().all(|&j| effort::in_serial_chain(model, j));
