@@ -43,6 +43,13 @@ impl EffectKind {
         matches!(self, Self::EffortOffset | Self::Spring | Self::GravityTilt)
     }
 
+    /// Whether this kind adds inertia to the joint (a rotor's, or a heavier part's with its
+    /// weight): the shape an error of the model's masses and inertias takes.
+    #[must_use]
+    pub fn adds_inertia(self) -> bool {
+        matches!(self, Self::Armature | Self::MassScale)
+    }
+
     /// Every fittable kind, in a fixed order (ties in selection go to the earlier one).
     pub const FITTABLE: [Self; 7] =
         [Self::ViscousDamping, Self::CoulombFriction, Self::Spring, Self::GravityTilt, Self::EndStop, Self::MassScale, Self::SoftClose];

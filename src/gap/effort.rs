@@ -761,8 +761,10 @@ pub struct EffortProblem<'a> {
     /// Per row and fold: whether the joint moves there ([`MOVING_FOLD_SHARE`]).
     moving: Vec<Vec<bool>>,
     /// Per row and sample: whether the sample's filtered terms draw on a reversal of the joint's
-    /// motion ([`near_reversals`]), where dry friction turns round.
-    reversals: Vec<Vec<bool>>,
+    /// motion ([`near_reversals`]), where dry friction turns round; None for a joint that keeps
+    /// fewer than [`MIN_AWAY_SHARE`] of its used samples away from its reversals (it turns too
+    /// often for a reading there).
+    reversals: Vec<Option<Vec<bool>>>,
     /// Blocks of columns already fitted ([`Self::fit_block`]).
     block_fits: Mutex<HashMap<Vec<usize>, Arc<BlockFit>>>,
     /// Blocks of columns already factored, for the bordered fits of forward selection
@@ -1113,9 +1115,13 @@ impl<'a> EffortProblem<'a> {
         problem.reversals = problem
             .rows
             .iter()
-            .map(|row| {
+            .zip(&problem.used)
+            .map(|(row, used)| {
                 let speed: Vec<f64> = sig.q[row.dof].iter().map(|x| x[1]).collect();
-                near_reversals(&sig.time_s, &speed, sig.band.support_s())
+                let near = near_reversals(&sig.time_s, &speed, sig.band.support_s());
+                let (count, away) =
+                    (0..near.len()).filter(|&i| used[i]).fold((0usize, 0usize), |(c, a), i| (c + 1, a + usize::from(!near[i])));
+                (away as f64 >= MIN_AWAY_SHARE * count as f64).then_some(near)
             })
             .collect();
         problem.build_candidates(sig, me, &reading.part_of, gravity.normalize_or_zero());
@@ -1869,15 +1875,7 @@ impl EffortProblem<'_> {
     fn rows_turning_round(&self, set: &[usize]) -> Vec<usize> {
         let has = |r: usize, f: &dyn Fn(&Candidate) -> bool| set.iter().any(|&x| self.candidates[x].row == r && f(&self.candidates[x]));
         (0..self.rows.len())
-            .filter(|&r| {
-                has(r, &|c| c.family == Family::Friction) && has(r, &|c| matches!(c.kind, EffectKind::Armature | EffectKind::MassScale))
-            })
-            .filter(|&r| {
-                let residual = &self.rows[r].residual;
-                let used: Vec<usize> = (0..residual.len()).filter(|&i| self.used[r][i] && residual[i].is_finite()).collect();
-                let away = used.iter().filter(|&&i| !self.reversals[r][i]).count();
-                away as f64 >= MIN_AWAY_SHARE * used.len() as f64
-            })
+            .filter(|&r| self.reversals[r].is_some() && has(r, &|c| c.family == Family::Friction) && has(r, &|c| c.kind.adds_inertia()))
             .collect()
     }
 
@@ -1930,7 +1928,8 @@ impl EffortProblem<'_> {
         for &r in rows {
             let (w, residual) = (self.weights[r], &self.rows[r].residual);
             let values: Vec<Option<&Vec<f64>>> = block.iter().map(|col| self.columns[*col].rows.get(&r)).collect();
-            for i in (0..residual.len()).filter(|&i| self.used[r][i] && residual[i].is_finite() && self.reversals[r][i]) {
+            let Some(near) = &self.reversals[r] else { continue };
+            for i in (0..residual.len()).filter(|&i| self.used[r][i] && residual[i].is_finite() && near[i]) {
                 let x: Vec<f64> = values.iter().map(|v| v.map_or(0.0, |v| if v[i].is_finite() { v[i] } else { 0.0 })).collect();
                 let f = self.fold_of[i];
                 for (j, &xj) in x.iter().enumerate() {
@@ -2143,7 +2142,7 @@ impl EffortProblem<'_> {
     /// false ones 28-47 %).
     fn inertia_only_at_reversals(&self, set: &[usize], c: usize) -> Option<(f64, f64)> {
         let cand = &self.candidates[c];
-        if !matches!(cand.kind, EffectKind::Armature | EffectKind::MassScale) || !self.rows_turning_round(set).contains(&cand.row) {
+        if !cand.kind.adds_inertia() || !self.rows_turning_round(set).contains(&cand.row) {
             return None;
         }
         let (theta, _) = self.fit_away_from_reversals(set, &[cand.row]);
@@ -2160,7 +2159,7 @@ impl EffortProblem<'_> {
     /// heavier part), judged against the model's own effort by [`Self::select`].
     fn shaped_like_model_error(&self, c: usize) -> bool {
         let kind = self.candidates[c].kind;
-        kind.depends_on_position_alone() || matches!(kind, EffectKind::Armature | EffectKind::MassScale)
+        kind.depends_on_position_alone() || kind.adds_inertia()
     }
 
     fn passes(&self, v: &Verdict) -> bool {
@@ -2921,11 +2920,7 @@ impl EffortProblem<'_> {
             let v = self.verdict(&without, &fitted, &self.rows_of(c), c, None);
             let cand = &self.candidates[c];
             let (theta, theta_without) = match &away {
-                Some((theta, without))
-                    if turning.contains(&cand.row) && matches!(cand.kind, EffectKind::Armature | EffectKind::MassScale) =>
-                {
-                    (theta, without)
-                }
+                Some((theta, without)) if turning.contains(&cand.row) && cand.kind.adds_inertia() => (theta, without),
                 _ => (&fitted.theta, &fitted.theta_without),
             };
             let effect = self.effect_of(c, theta);
