@@ -2244,7 +2244,8 @@ impl EffortProblem<'_> {
         // the two alternate until nothing is pruned (a few rounds at most).
         for _ in 0..3 {
             self.forward(&mut chosen, &mut current, banned);
-            if !self.prune(&mut chosen, &mut current) {
+            let replaced = self.replace(&mut chosen, &mut current, banned);
+            if !self.prune(&mut chosen, &mut current) && !replaced {
                 break;
             }
         }
@@ -2652,6 +2653,66 @@ impl EffortProblem<'_> {
                 self.passes(&v).then_some((c, v.gain))
             })
             .collect()
+    }
+
+    /// Sequential replacement (Miller, *Subset Selection in Regression*, §3.5): forward selection
+    /// takes the term that cuts the held-out error most at each step, and where two candidates
+    /// explain overlapping rows the first taken can mask a better pair. A heavier distal part
+    /// loads every joint above it; a rotor only its own: on a real double pendulum the elbow's
+    /// lighter part entered first and left the shoulder's rotor negative. Each chosen term is
+    /// tried in place by every other candidate touching its rows; the best swap is kept when the
+    /// newcomer passes against the rest and the swap cuts the held-out error on the rows of both
+    /// as a step must ([`Self::cut_passes`]). True when a swap was made.
+    fn replace(&self, chosen: &mut Vec<usize>, current: &mut Evaluation, banned: &[bool]) -> bool {
+        let mut any = false;
+        for _ in 0..chosen.len() {
+            let swaps: Vec<(f64, Vec<usize>)> = chosen
+                .par_iter()
+                .flat_map_iter(|&out| {
+                    let rest: Vec<usize> = chosen.iter().copied().filter(|&x| x != out).collect();
+                    let out_rows = self.rows_of(out);
+                    (0..banned.len())
+                        .filter(|&c| {
+                            !(banned[c]
+                                || chosen.contains(&c)
+                                || self.candidates[c].unresolved.is_some()
+                                || self.family_member(&rest, c).is_some()
+                                || !self.may_enter(&rest, c))
+                        })
+                        .filter_map(|c| {
+                            let rows: Vec<usize> = {
+                                let mut r = self.rows_of(c);
+                                if !r.iter().any(|x| out_rows.contains(x)) {
+                                    return None;
+                                }
+                                r.extend(&out_rows);
+                                r.sort_unstable();
+                                r.dedup();
+                                r
+                            };
+                            let set = self.with(&rest, c);
+                            let e = self.evaluate(&set);
+                            let (gain, fold_share) = self.held_out_cut(current, &e, &rows, c);
+                            if !self.cut_passes(gain, fold_share) {
+                                return None;
+                            }
+                            let v = self.verdict(&self.evaluate(&rest), &e, &self.rows_of(c), c, None);
+                            self.passes(&v).then_some((gain, set))
+                        })
+                        .collect::<Vec<_>>()
+                })
+                .collect();
+            // Ties go to the earlier swap (chosen order, then candidate order).
+            let best = swaps.into_iter().fold(None::<(f64, Vec<usize>)>, |best, (gain, set)| match best {
+                Some((g, _)) if gain <= g * 1.001 + 1e-12 => best,
+                _ => Some((gain, set)),
+            });
+            let Some((_, set)) = best else { break };
+            *current = self.evaluate(&set);
+            *chosen = set;
+            any = true;
+        }
+        any
     }
 
     /// Whether candidate c may join `chosen`: a refinement enters only in place of its base law,
@@ -3623,6 +3684,33 @@ mod tests {
         // A rotor (a fifth of the forearm's inertia about the elbow) acts at every acceleration,
         // away from the reversals too, and stays.
         check_elbow(&turning_ahead(0.01, 0.003), &[EffectKind::CoulombFriction, EffectKind::Armature]);
+    }
+
+    #[test]
+    fn a_distal_heavier_part_standing_in_for_a_proximal_offset_is_swapped_out() {
+        // Regression: MuJoCo's Panda with a sensor bias on joint 2 read a heavier part on joint 5
+        // (it loads every joint above it) that forward selection took first, and kept.
+        let model = two_link_model();
+        let (tree, _) = model.multibody().expect("tree");
+        let rules = SelectionRules { first_moment_tolerance: 0.0, ..SelectionRules::default() };
+        let problem = two_link_problem_with(&model, &tree, rules, 0.0, 0.01, &|d, _| if d == 0 { 0.4 } else { 0.0 });
+        let first_of = |row: usize, kind: EffectKind| first_candidate(&problem, row, kind);
+        let friction = [first_of(0, EffectKind::CoulombFriction), first_of(1, EffectKind::CoulombFriction)];
+        let none = vec![false; problem.candidates.len()];
+        let check = |start: &[usize], expected: &[usize]| {
+            let mut chosen = start.to_vec();
+            let mut current = problem.evaluate(&chosen);
+            let swapped = problem.replace(&mut chosen, &mut current, &none);
+            chosen.sort_unstable();
+            let mut want = expected.to_vec();
+            want.sort_unstable();
+            assert_eq!(chosen, want, "from {start:?}");
+            assert_eq!(swapped, start != expected);
+        };
+        let offset = first_of(0, EffectKind::EffortOffset);
+        check(&[friction[0], friction[1], first_of(1, EffectKind::MassScale)], &[friction[0], friction[1], offset]);
+        // The right terms stay as they are.
+        check(&[friction[0], friction[1], offset], &[friction[0], friction[1], offset]);
     }
 
     #[test]
