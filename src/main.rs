@@ -928,6 +928,9 @@ fn gap_cmd(model: Option<&Path>, recording: &Path, topic: Option<&str>, out: &Pa
         println!("{}", serde_json::to_string(&report)?);
     } else {
         println!("analysed {} in {:.2} s -> {}", recording.display(), started.elapsed().as_secs_f64(), out.display());
+        for note in &report.notes {
+            println!("note: {note}");
+        }
         for m in &report.mismatches {
             println!("mismatch {} {:.2}-{:.2} s rmse {:.4}: {}", m.joint, m.t_start, m.t_end, m.rmse, m.description);
         }

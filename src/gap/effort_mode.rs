@@ -915,7 +915,12 @@ pub(super) fn analyze_effort_space(
             );
         }
     }
-    Ok(EffortOutcome { joints: out, given, com_shift_m: com_shifts(&tree, &first_moments) })
+    Ok(EffortOutcome {
+        joints: out,
+        given,
+        com_shift_m: com_shifts(&tree, &first_moments),
+        implausible_accuracy: implausible_accuracy(&tree, &first_moments, &rules),
+    })
 }
 
 /// What effort space gives the rest of the analysis.
@@ -928,6 +933,10 @@ pub(super) struct EffortOutcome {
     /// Per link: its centre of mass moved by the model's own first-moment error fitted beside
     /// the effects (m, link frame; [`super::report::GapReport::com_shift_m`]).
     pub com_shift_m: BTreeMap<String, [f64; 3]>,
+    /// The links whose fitted first-moment error lies beyond what the model's accuracy allows
+    /// ([`SelectionRules::first_moment_implausible_sigmas`]), by name: (centre-of-mass shift, m;
+    /// the error in prior standard deviations).
+    pub implausible_accuracy: BTreeMap<String, (f64, f64)>,
 }
 
 /// First-moment changes as centre-of-mass shifts by link name (a massless body has none).
@@ -937,6 +946,22 @@ fn com_shifts(tree: &MultiBody, first_moments: &[(usize, DVec3)]) -> BTreeMap<St
         .filter_map(|&(b, h)| {
             let body = tree.bodies().get(b)?;
             (body.inertia.mass_kg > 0.0).then(|| (body.name.clone(), (h / body.inertia.mass_kg).to_array()))
+        })
+        .collect()
+}
+
+/// The links of `first_moments` whose fitted error is beyond
+/// [`SelectionRules::first_moment_implausible_sigmas`] of its prior
+/// ([`super::accuracy::first_moment_prior`]): no rigid-body error a model is published with.
+fn implausible_accuracy(tree: &MultiBody, first_moments: &[(usize, DVec3)], rules: &SelectionRules) -> BTreeMap<String, (f64, f64)> {
+    first_moments
+        .iter()
+        .filter_map(|&(b, h)| {
+            let body = tree.bodies().get(b)?;
+            let prior_sd = super::accuracy::first_moment_prior(tree, b, rules.first_moment_tolerance, rules.first_moment_min_lever_m);
+            let sigmas = h.length() / prior_sd;
+            (body.inertia.mass_kg > 0.0 && prior_sd > 0.0 && sigmas > rules.first_moment_implausible_sigmas)
+                .then(|| (body.name.clone(), (h.length() / body.inertia.mass_kg, sigmas)))
         })
         .collect()
 }

@@ -127,12 +127,13 @@ pub fn analyze(model: &GapModel, rec: &Recording, cfg: &GapConfig) -> Result<Gap
     let n = rec.time_s.len();
     let gravity = DVec3::from_array(rec.gravity_mps2);
     let t_split = rec.time_s[0] + (1.0 - cfg.held_out_fraction) * (rec.time_s[n - 1] - rec.time_s[0]);
-    let effort_mode::EffortOutcome { joints: mut outcomes, given, com_shift_m } = if effort_joints.is_empty() {
+    let effort_mode::EffortOutcome { joints: mut outcomes, given, com_shift_m, implausible_accuracy } = if effort_joints.is_empty() {
         effort_mode::EffortOutcome::default()
     } else {
         analyze_effort_space(&held_still, rec, cfg, &observed, &effort_joints, gravity, t_split)?
     };
     notes.extend(accuracy_note(&com_shift_m));
+    notes.extend(implausible_accuracy_note(&implausible_accuracy));
     let done: Vec<usize> = outcomes.iter().filter_map(|o| model.joint_index(&o.series.joint)).collect();
     let filled: Vec<Vec<f64>> =
         (0..model.joints.len()).map(|j| observed.get(&j).map_or_else(|| vec![0.0; n], |q| observe::fill_gaps(q))).collect();
@@ -218,6 +219,25 @@ fn accuracy_note(com_shift_m: &std::collections::BTreeMap<String, [f64; 3]>) -> 
         format!(
             "the model's centres of mass were fitted beside the effects as its own accuracy (first moments within {:.0} % of \
              each link's, not reported as effects; written into the fitted URDF): {}",
+            100.0 * effort::SelectionRules::default().first_moment_tolerance,
+            moved.join(", ")
+        )
+    })
+}
+
+/// The note that says the model's rigid bodies do not describe the recording, naming the links
+/// whose fitted first-moment error no model's accuracy allows; none when every link's is within
+/// it.
+fn implausible_accuracy_note(links: &std::collections::BTreeMap<String, (f64, f64)>) -> Option<String> {
+    (!links.is_empty()).then(|| {
+        let moved: Vec<String> =
+            links.iter().map(|(link, (shift_m, sigmas))| format!("{link} {:.1} mm ({sigmas:.0} σ)", 1e3 * shift_m)).collect();
+        format!(
+            "the model's rigid bodies do not describe this recording: to explain its efforts, centres of mass had to move \
+             beyond {:.0} σ of the model's accuracy ({:.0} % of each link's first moment): {}. A different robot or payload, \
+             efforts that are not the joints' own (units, sign, a gear ratio), or a log that does not resolve the motion; \
+             the effects named beside them are doubtful",
+            effort::SelectionRules::default().first_moment_implausible_sigmas,
             100.0 * effort::SelectionRules::default().first_moment_tolerance,
             moved.join(", ")
         )
