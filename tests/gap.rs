@@ -693,6 +693,7 @@ fn held_double_pendulum_csv(target: [f64; 2], kp: f64, kd: f64, duration_s: f64)
     for i in 0..=(duration_s * 200.0).round() as usize {
         let t0 = i as f64 / 200.0;
         let u = [0, 1].map(|d| kp * (target[d] - s[d]) - kd * s[2 + d]);
+        assert!((0..2).all(|d| (s[d] - target[d]).abs() < 0.5), "the loop lets go at {t0} s: {s:?}");
         writeln!(csv, "{t0:.6},{:.9},{:.9},{:.9},{:.9}", s[0], s[1], u[0], u[1]).expect("writes to a string");
         for step in 0..50 {
             s = rk4_step(s, t0 + f64::from(step) * h, h, &|x, _| double_pendulum_accel(x, u, [0.0, 0.0], (0.0, 0.0)));
@@ -895,6 +896,7 @@ fn efforts_no_rigid_body_error_explains_are_said_not_to_fit_the_model() {
         let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
         let note = report.notes.iter().find(|n| n.contains("do not describe this recording"));
         assert_eq!(note.is_some(), said, "{:?}", report.notes);
+        assert!(note.is_none_or(|n| n.contains("lower") && n.contains("upper")), "{note:?}");
     }
 }
 

@@ -96,12 +96,13 @@ pub struct SelectionRules {
     /// Least lever of a link's first-moment prior, m: a link whose centre of mass sits on its
     /// joint's origin is still not known to better than a centimetre or so times its mass.
     pub first_moment_min_lever_m: f64,
-    /// A fitted first-moment error beyond this many of its prior's standard deviations
-    /// ([`Self::first_moment_tolerance`]) is no model's accuracy: the report says the model's
-    /// rigid bodies do not describe the recording. Ten: half a link's first moment at 5 %. The
-    /// arms of three engines against models 5 % off, with sensor biases the first moments take
-    /// in, reach 4 σ, the real Panda and double pendulum 2; the efforts of an unstable discrete
-    /// control loop moved a 0.28 m link's centre of mass 2.6 m, silently.
+    /// A fitted first-moment error whose length is beyond this many of its prior's standard
+    /// deviations per axis ([`Self::first_moment_tolerance`]) is no model's accuracy: the report
+    /// says the model's rigid bodies do not describe the recording. Ten: half a link's first
+    /// moment (or of its mass × [`Self::first_moment_min_lever_m`]) at 5 %. The arms of three
+    /// engines against models 5 % off, with sensor biases the first moments take in, reach 4 σ,
+    /// the real Panda and double pendulum 2; the efforts of a discrete PD loop too stiff for its
+    /// sampling moved centres of mass by a metre and more, silently.
     pub first_moment_implausible_sigmas: f64,
     /// Least distance of a fitted level from none, in jackknife standard deviations over the
     /// folds left out, for the recording to resolve it (about the two-sided 95 % level): a term

@@ -935,7 +935,7 @@ pub(super) struct EffortOutcome {
     pub com_shift_m: BTreeMap<String, [f64; 3]>,
     /// The links whose fitted first-moment error lies beyond what the model's accuracy allows
     /// ([`SelectionRules::first_moment_implausible_sigmas`]), by name: (centre-of-mass shift, m;
-    /// the error in prior standard deviations).
+    /// the error's length in the prior's standard deviations per axis).
     pub implausible_accuracy: BTreeMap<String, (f64, f64)>,
 }
 
@@ -959,9 +959,11 @@ fn implausible_accuracy(tree: &MultiBody, first_moments: &[(usize, DVec3)], rule
         .filter_map(|&(b, h)| {
             let body = tree.bodies().get(b)?;
             let prior_sd = super::accuracy::first_moment_prior(tree, b, rules.first_moment_tolerance, rules.first_moment_min_lever_m);
+            if body.inertia.mass_kg <= 0.0 || prior_sd <= 0.0 {
+                return None;
+            }
             let sigmas = h.length() / prior_sd;
-            (body.inertia.mass_kg > 0.0 && prior_sd > 0.0 && sigmas > rules.first_moment_implausible_sigmas)
-                .then(|| (body.name.clone(), (h.length() / body.inertia.mass_kg, sigmas)))
+            (sigmas > rules.first_moment_implausible_sigmas).then(|| (body.name.clone(), (h.length() / body.inertia.mass_kg, sigmas)))
         })
         .collect()
 }

@@ -217,8 +217,8 @@ fn accuracy_note(com_shift_m: &std::collections::BTreeMap<String, [f64; 3]>) -> 
         let moved: Vec<String> =
             com_shift_m.iter().map(|(link, d)| format!("{link} {:.1} mm", 1e3 * DVec3::from_array(*d).length())).collect();
         format!(
-            "the model's centres of mass were fitted beside the effects as its own accuracy (first moments within {:.0} % of \
-             each link's, not reported as effects; written into the fitted URDF): {}",
+            "the model's centres of mass were fitted beside the effects as its own accuracy (a prior of {:.0} % of each \
+             link's first moment, not reported as effects; written into the fitted URDF): {}",
             100.0 * effort::SelectionRules::default().first_moment_tolerance,
             moved.join(", ")
         )
@@ -234,7 +234,8 @@ fn implausible_accuracy_note(links: &std::collections::BTreeMap<String, (f64, f6
             links.iter().map(|(link, (shift_m, sigmas))| format!("{link} {:.1} mm ({sigmas:.0} σ)", 1e3 * shift_m)).collect();
         format!(
             "the model's rigid bodies do not describe this recording: to explain its efforts, centres of mass had to move \
-             beyond {:.0} σ of the model's accuracy ({:.0} % of each link's first moment): {}. A different robot or payload, \
+             beyond {:.0} σ of the model's accuracy ({:.0} % of each link's first moment, or of its mass × 5 cm): {}. A \
+             different robot or payload, \
              efforts that are not the joints' own (units, sign, a gear ratio), or a log that does not resolve the motion; \
              the effects named beside them are doubtful",
             effort::SelectionRules::default().first_moment_implausible_sigmas,
