@@ -278,7 +278,7 @@ const WORKING_SAMPLES_PER_HALF_WIDTH: f64 = 5.0;
 #[must_use]
 pub fn working_step(time_s: &[f64], positions: &[Vec<f64>], first_pass_s: f64, cutoff_over_motion: f64) -> usize {
     let band = bandwidth(time_s, positions, first_pass_s, cutoff_over_motion);
-    let dt = median(&time_s.windows(2).map(|w| w[1] - w[0]).collect::<Vec<f64>>());
+    let dt = median_step_s(time_s);
     if dt <= 0.0 {
         return 1;
     }
@@ -1153,7 +1153,7 @@ impl<'a> EffortProblem<'a> {
         // and efforts are correlated over the filter's width: one independent piece of evidence
         // per 2√π σ of time (a Gaussian filter's equivalent width). The prior is weighed against
         // that evidence, not against the sample count, or any data would swamp it.
-        let dt = median(&sig.time_s.windows(2).map(|w| w[1] - w[0]).collect::<Vec<f64>>()).max(1e-9);
+        let dt = median_step_s(&sig.time_s).max(1e-9);
         let samples_per_piece = (2.0 * std::f64::consts::PI.sqrt() * sig.band.sigma_s / dt).max(1.0);
         // A body's owner: the row that carries it with the fewest bodies (its nearest joint).
         let owner = |b: usize| (0..beyond.len()).filter(|&r| beyond[r].contains(&b)).min_by_key(|&r| (beyond[r].len(), r));
@@ -1259,6 +1259,12 @@ pub fn median(v: &[f64]) -> f64 {
     }
     x.sort_by(f64::total_cmp);
     x[x.len() / 2]
+}
+
+/// Median step between successive time stamps, s (0 for fewer than two).
+#[must_use]
+pub fn median_step_s(time_s: &[f64]) -> f64 {
+    median(&time_s.windows(2).map(|w| w[1] - w[0]).collect::<Vec<f64>>())
 }
 
 /// 1.4826 · MAD of the finite values.
@@ -1614,6 +1620,16 @@ struct Evaluation {
 impl Evaluation {
     fn row_sse(&self, r: usize) -> f64 {
         self.fold_sse[r].iter().sum()
+    }
+
+    /// Held-out squared error summed over `rows`, in their order.
+    fn sse_over(&self, rows: &[usize]) -> f64 {
+        rows.iter().map(|&r| self.row_sse(r)).sum()
+    }
+
+    /// Held-out squared error summed over every row.
+    fn total_sse(&self) -> f64 {
+        (0..self.fold_sse.len()).map(|r| self.row_sse(r)).sum()
     }
 }
 
@@ -1999,6 +2015,14 @@ impl EffortProblem<'_> {
     }
 }
 
+/// The rows of two terms together, ascending and each once.
+fn rows_of_both(a: &[usize], b: &[usize]) -> Vec<usize> {
+    let mut rows: Vec<usize> = a.iter().chain(b).copied().collect();
+    rows.sort_unstable();
+    rows.dedup();
+    rows
+}
+
 /// The jackknife standard deviation of an estimate from its leave-one-fold-out values (`folds`
 /// of them; non-finite ones skipped).
 fn jackknife_sd(values: &[f64], folds: usize) -> f64 {
@@ -2107,8 +2131,7 @@ impl EffortProblem<'_> {
     /// [`Verdict::gain`] and [`Verdict::fold_share`] of `after` against `before`.
     fn held_out_cut(&self, before: &Evaluation, after: &Evaluation, rows: &[usize], c: usize) -> (f64, f64) {
         let k = self.rules.folds.max(2);
-        let sum = |e: &Evaluation| rows.iter().map(|&r| e.row_sse(r)).sum::<f64>();
-        let (b, a) = (sum(before), sum(after));
+        let (b, a) = (before.sse_over(rows), after.sse_over(rows));
         // Folds where these rows have held-out samples (a drawer resting on its stop for a whole
         // block says nothing about it), and for a law of the joint's motion, where it moves.
         let follows_motion = self.candidates[c].family.follows_motion();
@@ -2577,12 +2600,8 @@ impl EffortProblem<'_> {
         // In place of its family's member too: a spring takes the constant of an offset in.
         let swapped = self.with(&rest, c);
         let e = self.evaluate(&swapped);
-        let mut rows = self.rows_of(c);
-        rows.extend(self.rows_of(twin));
-        rows.sort_unstable();
-        rows.dedup();
-        let sse = |ev: &Evaluation| rows.iter().map(|&r| ev.row_sse(r)).sum::<f64>();
-        let (mine, theirs) = (sse(fitted), sse(&e));
+        let rows = rows_of_both(&self.rows_of(c), &self.rows_of(twin));
+        let (mine, theirs) = (fitted.sse_over(&rows), e.sse_over(&rows));
         let as_good = theirs.is_finite() && theirs <= mine * (1.0 + LOOK_ALIKE_SSE_SHARE);
         let rise = (theirs - mine) / mine.max(f64::MIN_POSITIVE);
         (as_good && self.plausible(c, &e.theta)).then_some((swapped, e, rise))
@@ -2678,10 +2697,9 @@ impl EffortProblem<'_> {
     /// over every row does not rise (the model's own first moments tie a chain's rows into one
     /// fit, so a swap refits rows beyond the two terms'). True when a swap was made.
     fn replace(&self, chosen: &mut Vec<usize>, current: &mut Evaluation, banned: &[bool]) -> bool {
-        let total = |e: &Evaluation| (0..self.rows.len()).map(|r| e.row_sse(r)).sum::<f64>();
         let mut any = false;
         for _ in 0..chosen.len() {
-            let current_total = total(current);
+            let current_total = current.total_sse();
             let swaps: Vec<(f64, Vec<usize>)> = chosen
                 .par_iter()
                 .flat_map_iter(|&out| {
@@ -2704,12 +2722,11 @@ impl EffortProblem<'_> {
                             if !c_rows.iter().any(|r| out_rows.contains(r)) {
                                 return None;
                             }
-                            let rows: Vec<usize> =
-                                c_rows.iter().chain(&out_rows).copied().collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+                            let rows = rows_of_both(&c_rows, &out_rows);
                             let set = self.with(&rest, c);
                             let e = self.evaluate(&set);
                             let (gain, fold_share) = self.held_out_cut(current, &e, &rows, c);
-                            if !self.cut_passes(gain, fold_share) || total(&e) > current_total {
+                            if !self.cut_passes(gain, fold_share) || e.total_sse() > current_total {
                                 return None;
                             }
                             let v = self.verdict(&without, &e, &c_rows, c, None);

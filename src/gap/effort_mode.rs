@@ -995,13 +995,12 @@ fn chain_horizon_s(tree: &MultiBody, sig: &Signals, gravity: DVec3, t_split: f64
     let training: Vec<usize> =
         (0..sig.time_s.len()).filter(|&i| sig.time_s[i] < t_split && sig.q.iter().all(|d| d[i][0].is_finite())).collect();
     let every = training.len().div_ceil(64).max(1);
-    let mut rates: Vec<f64> = training
+    let rates: Vec<f64> = training
         .iter()
         .step_by(every)
         .map(|&i| instability_rate(tree, &sig.q.iter().map(|d| d[i][0]).collect::<Vec<f64>>(), gravity))
         .collect();
-    rates.sort_by(f64::total_cmp);
-    let rate = rates.get(rates.len() / 2).copied().unwrap_or(0.0);
+    let rate = super::effort::median(&rates);
     if rate > 0.0 { period_s.min(super::held_out::HELD_OUT_E_FOLDS / rate).max(HELD_OUT_HORIZON_S.0) } else { period_s }
 }
 

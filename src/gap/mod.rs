@@ -971,8 +971,7 @@ fn compliant_stop(
     t_split: f64,
 ) -> Result<fit::FitResult, Option<String>> {
     let k = chosen.effects.iter().position(|e| e.kind == EffectKind::EndStop).ok_or(None)?;
-    let intervals: Vec<f64> = problem.input.time_s.windows(2).map(|w| w[1] - w[0]).collect();
-    let dt = effort::median(&intervals);
+    let dt = effort::median_step_s(problem.input.time_s);
     let hard_restitution = chosen.effects[k].params[1];
     let mut best: Option<fit::FitResult> = None;
     for n in CONTACT_STARTS_SAMPLES {
