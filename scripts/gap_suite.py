@@ -61,7 +61,10 @@ biases (effort_offset) are added to the recorded efforts; the controller knows o
 A third such case has on every joint the smooth, direction-dependent friction identified on a real
 Panda (Gaz et al., RA-L 2019: a logistic law of the speed, applied at every engine step) instead of
 the engine's ideal friction loss; its truth is that law in the spec's terms (friction,
-transition_speed, friction_reverse).
+transition_speed, friction_reverse). One arm stands on a base tilted by a degree (the engine's
+option gravity leaning, model.urdf level): its truth is a gravity_tilt on the base joint, tilt_deg
+and the equilibrium_position at which the base joint's child frame x axis points where gravity
+leans (lean_equilibrium).
 """
 
 import argparse
@@ -1687,6 +1690,10 @@ class ArmCase:
     # joint -> (A, k, c): the joint's friction as a published identification of a real arm has
     # it, A / (1 + exp(-k (v + c))) - A / (1 + exp(-k c)), applied at every engine step.
     friction_law: dict = field(default_factory=dict)
+    # (tilt_deg, toward): the arm stands on a base tilted by tilt_deg, the engine's gravity leaning
+    # towards the world's horizontal direction at angle `toward` (rad from x about z); model.urdf
+    # stands level, as a robot on a floor or cart not quite level is modelled.
+    base_tilt: tuple = ()
 
 
 # The joint friction identified on a real Franka Emika Panda (C. Gaz, M. Cognetti, A. Oliva,
@@ -1752,7 +1759,68 @@ ARM_CASES = [
             "Panda against a model.urdf with identification errors (up to 5 % off); on every joint the logistic "
             "friction identified on the real arm (Gaz et al., RA-L 2019), applied at every engine step", [],
             model_error=0.05, friction_law=PANDA_PUBLISHED_FRICTION),
+    # A base that is not level: the engine's gravity leans by a degree, model.urdf stands level.
+    ArmCase("arm_panda_tilted_base", "panda",
+            "Panda on a base tilted 1 deg, its model.urdf standing level; dry "
+            "friction on joints 1, 2 and 4", [
+                ("joint1", "coulomb_friction", 0.3), ("joint2", "coulomb_friction", 0.5), ("joint4", "coulomb_friction", 0.4)],
+            base_tilt=(1.0, 2.2)),
 ]
+
+
+def tilted_gravity(tilt_deg, toward):
+    """GRAVITY leaning by tilt_deg towards the horizontal direction at angle `toward` about z."""
+    tilt, g = math.radians(tilt_deg), -GRAVITY[2]
+    return (g * math.sin(tilt) * math.cos(toward), g * math.sin(tilt) * math.sin(toward), -g * math.cos(tilt))
+
+
+def frame_at_zero(mech, joint):
+    """World rotation of `joint`'s frame (its child's frame at q = 0): the origins' rpy from the root."""
+    chain, name = [], joint.name
+    while True:
+        j = mech.joint(name)
+        chain.append(j)
+        parent = next((k for k in mech.joints if k.child == j.parent), None)
+        if parent is None:
+            break
+        name = parent.name
+    rot = np.eye(3)
+    for j in reversed(chain):
+        rot = rot @ quat_to_matrix(quat_from_rpy(j.rpy))
+    return rot
+
+
+def quat_to_matrix(quat):
+    """Rotation matrix of a unit quaternion (w, x, y, z)."""
+    out = np.zeros(9)
+    mujoco.mju_quat2Mat(out, np.asarray(quat, float))
+    return out.reshape(3, 3)
+
+
+def base_tilt_truth(mech, tilt_deg, toward):
+    """The spec's gravity_tilt of a chain's base joint (partscene's reading, issue 16): tilt_deg, and
+    equilibrium_position, the base joint's angle at which its child frame's x axis (y where x lies
+    along the joint axis) at the zero pose points where gravity leans."""
+    base = mech.joint(mech.movable()[0])
+    return base.name, {"tilt_deg": tilt_deg, "equilibrium_position": lean_equilibrium(frame_at_zero(mech, base), base.axis, toward)}
+
+
+def lean_equilibrium(rot, axis, toward):
+    """The equilibrium_position of a base tilt leaning towards `toward` (rad from x about z), for a base joint whose
+    frame at the zero pose has world rotation `rot` and whose axis is `axis` in that frame: the joint's angle at
+    which the frame's x axis (y where x lies along the joint axis) points where gravity leans."""
+    down = np.array([0.0, 0.0, -1.0])
+
+    def horizontal(v):
+        v = v - (v @ down) * down
+        return v / np.linalg.norm(v)
+
+    axis = rot @ unit(axis)
+    first = rot[:, 0] if abs(rot[:, 0] @ axis) < 0.9 else rot[:, 1]
+    h1 = horizontal(first)
+    h2 = horizontal(np.cross(axis, h1))
+    lean = np.array([math.cos(toward), math.sin(toward), 0.0])
+    return round(math.atan2(lean @ h2, lean @ h1), 6)
 
 
 def arm_xml(key, mode, cache={}):  # noqa: B006  the cache lives for the run
@@ -2007,6 +2075,8 @@ def run_arm_case(case, seed, out, mode, duration=ARM_DURATION_S):
         nominal.close()
         nominal = MujocoSim(mujoco.MjSpec.from_string(urdf).compile(), names)
     add_arm_effects(spec, case)
+    if case.base_tilt:
+        spec.option.gravity = tilted_gravity(*case.base_tilt)
     plant = (FrictionLawSim(spec.compile(), names, case.friction_law) if case.friction_law
              else MujocoSim(spec.compile(), names))
     armature = np.array([defaults[n]["armature"] for n in names])
@@ -2025,6 +2095,16 @@ def run_arm_case(case, seed, out, mode, duration=ARM_DURATION_S):
     write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf", "gravity": "0 0 -9.81"})
     effects = arm_effects(case, defaults)
     model_effort = inverse_dynamics(nominal, traj, np.gradient(traj.qd, traj.t, axis=0))
+    tilt_effort = None
+    if case.base_tilt:
+        joint, params = base_tilt_truth(mech, *case.base_tilt)
+        effects.append(Effect(joint, "gravity_tilt", params,
+                              detail=f"MuJoCo option gravity {tuple(round(g, 6) for g in tilted_gravity(*case.base_tilt))}: "
+                                     "the whole arm stands tilted; model.urdf stands level"))
+        tilted_spec = mujoco.MjSpec.from_string(urdf)
+        tilted_spec.option.gravity = tilted_gravity(*case.base_tilt)
+        tilted = MujocoSim(tilted_spec.compile(), names)
+        tilt_effort = np.array([tilted.gravity(q) - nominal.gravity(q) for q in traj.q])
     truth = {
         "format": TRUTH_FORMAT, "engine": ENGINES["mujoco"], "case": case.name, "description": case.description,
         "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params, "engine_detail": e.detail} for e in effects],
@@ -2039,7 +2119,7 @@ def run_arm_case(case, seed, out, mode, duration=ARM_DURATION_S):
         "dropouts": 0.0,
         "excitation": "computed torque with model.urdf + the arm's own armature (1.5 Hz, damping ratio 0.7) around a "
                       "slow 3-sine target (0.05-0.3 Hz) + 3 sines per joint (0.5-3 Hz), decided at 200 Hz and held",
-        "visibility_effort_share": effect_shares(effects, names, traj, model_effort),
+        "visibility_effort_share": effect_shares(effects, names, traj, model_effort, tilt_effort),
     }
     write_json(os.path.join(folder, "truth.json"), truth)
     return summary_line(ArmRun(case.name, "mujoco", duration, 200), traj, truth)

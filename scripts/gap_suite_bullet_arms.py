@@ -25,6 +25,8 @@ after each one), held between samples as the spec says. Concealed effects, each 
   coulomb_friction  a VELOCITY_CONTROL motor at target speed 0 whose force bound is the friction level (pybullet's
                     joint-friction idiom): a bounded impulse that sticks
   viscous_damping   changeDynamics(jointDamping=b), checked to act as -b*qd (gap_suite.check_bullet_joint_damping)
+  gravity_tilt      of the base joint: setGravity leaning by tilt_deg (the whole robot stands tilted, model.urdf
+                    level); equilibrium_position as gap_suite.lean_equilibrium says, from the engine's own frames
 Excitation: gap_suite.arm_excitation, the MuJoCo arm suite's: computed torque with model.urdf (1.5 Hz, damping
 ratio 0.7) around a slow 3-sine target inside the joint ranges, plus 3 sines per joint, decided at 200 Hz and held.
 Noise: 1e-4 rad on positions, 1 % of each joint's RMS effort on efforts. The friction levels are sized to what the
@@ -82,6 +84,9 @@ class ArmCase:
     friction: list = field(default_factory=lambda: [0.0] * 7)
     damping: list = field(default_factory=lambda: [0.0] * 7)
     model_error: float = 0.0
+    # (tilt_deg, toward): the robot stands on a base tilted by tilt_deg, the engine's gravity leaning towards the
+    # world's horizontal direction at angle `toward` (gap_suite.tilted_gravity); model.urdf stands level.
+    base_tilt: tuple = ()
     engine: str = "bullet"
     duration: float = DURATION_S
     rate: int = RATE_HZ
@@ -113,6 +118,8 @@ def cases():
                 friction=[1.0, 0.0, 0.8, 0.0, 0.3, 0.0, 0.05], damping=[0.0, 1.0, 0.0, 0.5, 0.0, 0.2, 0.0]),
         ArmCase("bullet_panda_identified_model", "Panda; dry friction on every joint, model.urdf's inertias up to 5 % off",
                 robot="panda", friction=PANDA_FRICTION, model_error=0.05),
+        ArmCase("bullet_iiwa_tilted_base", "iiwa on a base tilted 0.7 deg (model.urdf level); dry friction on joints 1-4",
+                friction=[2.0, 2.0, 0.8, 0.8, 0.0, 0.0, 0.0], base_tilt=(0.7, -0.9)),
     ]
 
 
@@ -140,7 +147,7 @@ class BulletArm(gs.BulletSim):
     """An arm in pybullet DIRECT, loaded from URDF text: gap_suite.BulletSim's stepping (TORQUE_CONTROL before
     every step), state and dynamics, with friction motors and joint damping per joint (`joints`, in order)."""
 
-    def __init__(self, text, joints, friction, damping):  # noqa: super().__init__ builds from gap_suite's mechanisms
+    def __init__(self, text, joints, friction, damping, gravity=gs.GRAVITY):  # noqa: super().__init__ builds from gap_suite's mechanisms
         self.cid = pybullet.connect(pybullet.DIRECT)
         path = os.path.join(os.environ.get("TMPDIR", "/tmp"), f"gap_suite_bullet_arm_{os.getpid()}.urdf")
         with open(path, "w", encoding="utf-8") as f:
@@ -151,7 +158,7 @@ class BulletArm(gs.BulletSim):
         finally:
             os.remove(path)
         pybullet.setTimeStep(DT, physicsClientId=self.cid)
-        pybullet.setGravity(*gs.GRAVITY, physicsClientId=self.cid)
+        pybullet.setGravity(*gravity, physicsClientId=self.cid)
         infos = [pybullet.getJointInfo(self.body, i, physicsClientId=self.cid)
                  for i in range(pybullet.getNumJoints(self.body, physicsClientId=self.cid))]
         index = {info[1].decode(): info[0] for info in infos}
@@ -175,7 +182,9 @@ def run_case(case, seed, out):
     engine_text = shipped_urdf(robot)
     model_text = identified(engine_text, case.model_error, rng) if case.model_error > 0 else engine_text
     nominal = BulletArm(model_text, joints, [0.0] * 7, [0.0] * 7)
-    plant = BulletArm(engine_text, joints, case.friction, case.damping)
+    gravity = gs.tilted_gravity(*case.base_tilt) if case.base_tilt else gs.GRAVITY
+    plant = BulletArm(engine_text, joints, case.friction, case.damping, gravity)
+    tilt = base_tilt_truth(plant, case) if case.base_tilt else None
     traj, table, effort_sigma = drive(plant, nominal, case, rng)
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
@@ -186,12 +195,18 @@ def run_case(case, seed, out):
         f.write(model_text.replace("<robot ", f"{note}\n<robot ", 1))
     gs.write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf", "gravity": "0 0 -9.81"})
     model_effort = gs.inverse_dynamics(nominal, traj, np.gradient(traj.qd, traj.t, axis=0))
+    tilt_effort = None
+    if tilt is not None:
+        tilted = BulletArm(model_text, joints, [0.0] * 7, [0.0] * 7, gravity)
+        tilt_effort = np.array([tilted.dynamics(q, np.zeros(7))[1] - nominal.dynamics(q, np.zeros(7))[1] for q in traj.q])
+        tilted.close()
     nominal.close()
     detail = {"coulomb_friction": "VELOCITY_CONTROL motor, target speed 0, force bound = friction",
-              "viscous_damping": "changeDynamics(jointDamping)"}
+              "viscous_damping": "changeDynamics(jointDamping)",
+              "gravity_tilt": f"setGravity{tuple(round(g, 6) for g in gravity)}: the whole robot stands tilted"}
     engine_detail = (f"{ENGINE}, pybullet_data {source_path} (no geometry, no joint damping of its own, fingers welded), "
                      f"DIRECT, fixed base, {DT} s steps, link damping 0, torques through TORQUE_CONTROL set before every step")
-    truth = arm_truth(ENGINE, case, seed, (detail, engine_detail), traj, effort_sigma, model_effort)
+    truth = arm_truth(ENGINE, case, seed, (detail, engine_detail), traj, effort_sigma, model_effort, (tilt, tilt_effort))
     gs.write_json(os.path.join(folder, "truth.json"), truth)
     return gs.summary_line(case, traj, truth)
 
@@ -213,13 +228,29 @@ def drive(plant, nominal, case, rng, offsets=None):
     return traj, table, effort_sigma
 
 
-def arm_truth(engine, case, seed, details, traj, effort_sigma, model_effort):
+def base_tilt_truth(plant, case):
+    """The gravity_tilt of the case's base tilt on the robot's first joint (gap_suite.lean_equilibrium), from the
+    engine's own frames at the zero pose."""
+    for i in plant.idx:
+        pybullet.resetJointState(plant.body, i, 0.0, 0.0, physicsClientId=plant.cid)
+    first = plant.idx[0]
+    frame = pybullet.getLinkState(plant.body, first, computeForwardKinematics=True, physicsClientId=plant.cid)[5]
+    rot = np.array(pybullet.getMatrixFromQuaternion(frame)).reshape(3, 3)
+    axis = pybullet.getJointInfo(plant.body, first, physicsClientId=plant.cid)[13]
+    tilt_deg, toward = case.base_tilt
+    return Effect(plant.names[0], "gravity_tilt",
+                  {"tilt_deg": tilt_deg, "equilibrium_position": gs.lean_equilibrium(rot, axis, toward)})
+
+
+def arm_truth(engine, case, seed, details, traj, effort_sigma, model_effort, tilted=(None, None)):
     """truth.json of an arm case recorded by `engine` with gap_suite.arm_excitation: `details` is (how the engine made
     each effect kind, how it made the recording), `effort_sigma` the noise put on each joint's effort, `model_effort`
-    model.urdf's inverse dynamics along the motion (for the effects' shares)."""
+    model.urdf's inverse dynamics along the motion (for the effects' shares); `tilted` the base tilt's effect and the
+    efforts it adds along the motion, where the robot stands tilted."""
     detail, engine_detail = details
     joints = ROBOTS[case.robot].joints
-    effects = case.effects
+    tilt, tilt_effort = tilted
+    effects = case.effects + ([tilt] if tilt is not None else [])
     return {
         "format": gs.TRUTH_FORMAT, "engine": engine, "case": case.name, "description": case.description,
         "effects": [{"joint": e.joint, "kind": e.kind, "params": e.params, "engine_detail": detail[e.kind]} for e in effects],
@@ -231,7 +262,7 @@ def arm_truth(engine, case, seed, details, traj, effort_sigma, model_effort):
         "dropouts": 0.0,
         "excitation": "computed torque with model.urdf (1.5 Hz, damping ratio 0.7) around a slow 3-sine target "
                       "(0.05-0.3 Hz) + 3 sines per joint (0.5-3 Hz), decided at 200 Hz and held (gap_suite.arm_excitation)",
-        "visibility_effort_share": gs.effect_shares(effects, joints, traj, model_effort),
+        "visibility_effort_share": gs.effect_shares(effects, joints, traj, model_effort, tilt_effort),
     }
 
 

@@ -139,7 +139,13 @@ pub fn principal_axes(points: &[Vec3]) -> (Vec3, Mat3) {
 /// `scripts/check_sim_clients.py`.)
 #[must_use]
 pub fn quat_to_rpy(q: Quat) -> [f64; 3] {
-    let m = glam::DMat3::from_quat(q.as_dquat().normalize());
+    dquat_to_rpy(q.as_dquat())
+}
+
+/// [`quat_to_rpy`] of a double-precision rotation.
+#[must_use]
+pub fn dquat_to_rpy(q: glam::DQuat) -> [f64; 3] {
+    let m = glam::DMat3::from_quat(q.normalize());
     // Row r, column c of the matrix is m.col(c)[r].
     let at = |r: usize, c: usize| m.col(c)[r];
     let cos_pitch = at(0, 0).hypot(at(1, 0));

@@ -142,6 +142,19 @@ impl MultiBody {
         out
     }
 
+    /// The same tree on a base turned by `world_from_base` about the root frame's origin: every
+    /// body carried by the fixed root is placed by it (a robot mounted on a tilted table). Under
+    /// the same gravity this is the tree as it was with gravity turned by the inverse rotation.
+    #[must_use]
+    pub fn with_base_rotated(&self, world_from_base: DQuat) -> Self {
+        let turn = ParentFromChild::new(world_from_base, DVec3::ZERO);
+        let mut out = self.clone();
+        for b in out.bodies.iter_mut().filter(|b| b.parent.is_none()) {
+            b.parent_from_joint = turn.then(&b.parent_from_joint);
+        }
+        out
+    }
+
     /// The bodies, parents first.
     #[must_use]
     pub fn bodies(&self) -> &[Body] {

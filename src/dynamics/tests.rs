@@ -128,6 +128,22 @@ fn mass_matrix_is_the_acceleration_part_of_inverse_dynamics() {
     }
 }
 
+/// A tree on a turned base under gravity is the tree as it was under gravity turned back.
+#[test]
+fn a_turned_base_is_gravity_turned_the_other_way() {
+    let mb = branched();
+    let world_from_base = DQuat::from_axis_angle(DVec3::new(0.6, -0.8, 0.0), 0.05);
+    let turned = mb.with_base_rotated(world_from_base);
+    let (q, qd, qdd) = ([0.4, -1.1, 0.07], [0.9, -2.0, 0.3], [1.5, -0.3, 2.0]);
+    let want = mb.inverse_dynamics(&q, &qd, &qdd, world_from_base.inverse() * G);
+    let got = turned.inverse_dynamics(&q, &qd, &qdd, G);
+    let level = mb.inverse_dynamics(&q, &qd, &qdd, G);
+    for d in 0..3 {
+        assert!((got[d] - want[d]).abs() < 1e-12 * (1.0 + want[d].abs()), "dof {d}: {} against {}", got[d], want[d]);
+    }
+    assert!((0..3).any(|d| (got[d] - level[d]).abs() > 1e-2), "the turn changes nothing: {got:?} against {level:?}");
+}
+
 /// A replay step asks for both from one set of placements: the same numbers, bit for bit.
 #[test]
 fn mass_matrix_and_bias_together_are_each_alone_bit_for_bit() {

@@ -321,6 +321,8 @@ impl JointPhysics {
                 EffectKind::EffortOffset => p.effort_offset += x[0],
                 EffectKind::Armature => p.armature += x[0],
                 EffectKind::Spring => (p.stiffness, p.rest_position) = (x[0], x[1]),
+                // A chain's base tilt turns the whole tree (`super::tilt`), not this joint alone.
+                EffectKind::GravityTilt if super::tilt::base_lean(e).is_some() => {}
                 EffectKind::GravityTilt => (p.tilt_amplitude, p.tilt_equilibrium) = (x[0], x[1]),
                 EffectKind::EndStop => p.stops.push(Stop {
                     position: x[0],

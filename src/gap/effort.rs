@@ -23,6 +23,7 @@ use super::accuracy::{bodies_beyond, first_moment_efforts, first_moment_prior};
 use super::effects::{Effect, EffectKind};
 use super::model::{DofKind, GapModel};
 use super::smooth::{GAUSS_HALF_GAIN_F_SIGMA, GAUSS_SUPPORT_SIGMAS, Smoother, local_cubic};
+use super::tilt::{BASE_TILT_PARAMS, base_joint, tilt_applies, tilt_directions, tilt_efforts};
 use crate::dynamics::MultiBody;
 use crate::linalg::{back_substitute, cholesky, forward_substitute, solve_spd};
 
@@ -104,6 +105,10 @@ pub struct SelectionRules {
     /// the real Panda and double pendulum 2; the efforts of a discrete PD loop too stiff for its
     /// sampling moved centres of mass by a metre and more, silently.
     pub first_moment_implausible_sigmas: f64,
+    /// Largest tilt of a chain's base, degrees ([`super::tilt`]): a robot stands within a few
+    /// degrees of level; a steeper "tilt" is the fit taking in something else (the first
+    /// recordings of a real arm showed 11° tilts standing in for friction).
+    pub max_base_tilt_deg: f64,
     /// Least distance of a fitted level from none, in jackknife standard deviations over the
     /// folds left out, for the recording to resolve it (about the two-sided 95 % level): a term
     /// whose level the final reading fits closer to none is reported only where the joint's
@@ -143,6 +148,7 @@ impl Default for SelectionRules {
             first_moment_tolerance: 0.05,
             first_moment_min_lever_m: 0.05,
             first_moment_implausible_sigmas: 10.0,
+            max_base_tilt_deg: 10.0,
             min_resolved_sigmas: 2.0,
         }
     }
@@ -391,6 +397,11 @@ struct Candidate {
 }
 
 impl Candidate {
+    /// A chain's base tilt ([`super::tilt`]): its hyper-parameters are its two directions.
+    fn is_base_tilt(&self) -> bool {
+        self.kind == EffectKind::GravityTilt && self.hyper.len() == 6
+    }
+
     /// A law that extends its family's base law with more parameters (Stribeck's break-away
     /// over Coulomb friction, a second Coulomb level for the reverse direction).
     fn is_refinement(&self) -> bool {
@@ -909,6 +920,41 @@ struct Efforts {
 struct ModelEfforts {
     filtered: Efforts,
     size: Efforts,
+    /// The efforts a tilted base adds, where a chain's base joint is identified ([`super::tilt`]).
+    base_tilt: Option<BaseTiltEfforts>,
+}
+
+/// The two columns of a chain's base tilt: per horizontal direction ([`tilt_directions`]), per
+/// dof and sample, the effort of gravity along it at rest ([`tilt_efforts`]).
+struct BaseTiltEfforts {
+    /// The base joint's index among the effort joints (the candidate's row).
+    row: usize,
+    directions: [DVec3; 2],
+    /// Parallel-filtered like the measured efforts, NaN outside the usable samples.
+    filtered: [Vec<Vec<f64>>; 2],
+    /// On the motion's description, unfiltered (sizes).
+    size: [Vec<Vec<f64>>; 2],
+}
+
+/// The base-tilt columns over `sig`, where the model's chain has a base joint among the effort
+/// joints whose axis is near vertical.
+fn base_tilt_efforts(
+    model: &GapModel,
+    tree: &MultiBody,
+    sig: &Signals,
+    gravity: DVec3,
+    effort_joints: &[usize],
+) -> Option<BaseTiltEfforts> {
+    let j = base_joint(model)?;
+    let row = effort_joints.iter().position(|&x| x == j)?;
+    let directions = tilt_directions(model, j, gravity.normalize_or_zero())?;
+    let (raw, size) = rayon::join(|| tilt_efforts(tree, &sig.raw, gravity, directions), || tilt_efforts(tree, &sig.q, gravity, directions));
+    let filtered = raw.map(|dofs| {
+        dofs.iter()
+            .map(|x| sig.filter.apply(x).into_iter().enumerate().map(|(i, y)| if sig.usable[i] { y } else { f64::NAN }).collect())
+            .collect()
+    });
+    Some(BaseTiltEfforts { row, directions, filtered, size })
 }
 
 /// The model's efforts evaluated sample by sample at the motion `q` (NaN where it is not finite).
@@ -958,7 +1004,7 @@ fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVe
         gravity: filtered(raw.gravity),
         body_tau: raw.body_tau.into_iter().map(|(b, v)| (b, filtered(v))).collect(),
     };
-    ModelEfforts { filtered, size }
+    ModelEfforts { filtered, size, base_tilt: None }
 }
 
 /// The moving part of a joint: its child body and the bodies welded to it.
@@ -1017,10 +1063,11 @@ impl ModelReading {
             })
             .collect();
         let dof_of: Vec<usize> = effort_joints.iter().map(|&j| model.dofs().iter().position(|&x| x == j)).collect::<Option<_>>()?;
-        let (me, moments) = rayon::join(
+        let (mut me, moments) = rayon::join(
             || model_efforts(model, &tree, sig, gravity, &bodies),
             || first_moment_columns(&tree, sig, gravity, &beyond, &dof_of, rules),
         );
+        me.base_tilt = base_tilt_efforts(model, &tree, sig, gravity, effort_joints);
         Some(Self { effort_joints: effort_joints.to_vec(), gravity, tree, part_of, beyond, me, moments })
     }
 }
@@ -1219,20 +1266,6 @@ impl<'a> EffortProblem<'a> {
         let k = self.rules.folds.max(2);
         (0..n).map(|i| (((sig.time_s[i] - t0) / (t1 - t0).max(1e-12) * k as f64) as usize).min(k - 1)).collect()
     }
-}
-
-/// Largest angle between a joint's axis and the vertical for which `gravity_tilt` is a candidate.
-/// A tilt makes gravity act on a joint whose model says it does not (a door hinge); on a joint
-/// far from vertical the model's gravity effort already dominates and a small tilt only scales
-/// it by cos(tilt) — there the sin law would soak up other errors.
-pub const MAX_TILT_AXIS_FROM_VERTICAL_DEG: f64 = 30.0;
-
-/// Whether `gravity_tilt` applies to joint j (axis near vertical at the model's zero pose).
-#[must_use]
-pub fn tilt_applies(model: &GapModel, j: usize, gravity_dir: DVec3) -> bool {
-    let zero = vec![0.0; model.joints.len()];
-    let (_, axis) = model.joint_frame_world(j, &zero);
-    gravity_dir != DVec3::ZERO && axis.normalize_or_zero().dot(gravity_dir).abs() >= MAX_TILT_AXIS_FROM_VERTICAL_DEG.to_radians().cos()
 }
 
 /// Whether joint j has a movable joint above or below it (an arm, a pendulum chain) rather than
@@ -1487,6 +1520,7 @@ impl EffortProblem<'_> {
         if joint.kind.is_rotational() && !chain && tilt_applies(self.model, j, gravity_dir) {
             sink.push(r, EffectKind::GravityTilt, Family::Tilt, Vec::new(), false, vec![col(&|x| x[0].sin()), col(&|x| -x[0].cos())]);
         }
+        self.push_base_tilt(&mut sink, r, me, n);
         if joint.kind != DofKind::Continuous && hi > lo {
             let closed = joint.lower.unwrap_or(0.0);
             let far = if (hi - closed).abs() >= (lo - closed).abs() { hi } else { lo };
@@ -1498,6 +1532,40 @@ impl EffortProblem<'_> {
             }
         }
         sink
+    }
+
+    /// The base-tilt candidate of row r where it is the chain's base joint ([`super::tilt`]): two
+    /// columns, the efforts of gravity along two horizontal directions on every identified joint
+    /// (a tilted base loads them all). Its hyper-parameters are the two directions (world frame).
+    fn push_base_tilt(&self, sink: &mut CandidateSink, r: usize, me: &ModelEfforts, n: usize) {
+        let Some(bt) = me.base_tilt.as_ref().filter(|bt| bt.row == r) else { return };
+        let d = self.rows[r].dof;
+        let mut columns = Vec::new();
+        for k in 0..2 {
+            let mut rows = BTreeMap::new();
+            for (rr, info) in self.rows.iter().enumerate() {
+                let values: Vec<f64> = (0..n).map(|i| if self.used[rr][i] { bt.filtered[k][info.dof][i] } else { f64::NAN }).collect();
+                if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
+                    rows.insert(rr, values);
+                }
+            }
+            if !rows.contains_key(&r) {
+                return;
+            }
+            let size = (0..n).map(|i| if self.used[r][i] { bt.size[k][d][i] } else { f64::NAN }).collect();
+            sink.columns.push(Column { rows, size, precision: 0.0 });
+            columns.push(sink.columns.len() - 1);
+        }
+        let hyper = bt.directions.iter().flat_map(DVec3::to_array).collect();
+        sink.candidates.push(Candidate {
+            row: r,
+            kind: EffectKind::GravityTilt,
+            hyper,
+            asymmetric: false,
+            columns,
+            family: Family::Tilt,
+            unresolved: None,
+        });
     }
 
     /// The heavier-part candidate of row r: the effort of its moving part's inertia on every
@@ -1968,8 +2036,16 @@ impl EffortProblem<'_> {
         (a, b)
     }
 
-    /// Rows whose fit a candidate changes.
+    /// Rows a candidate is judged on: those whose fit it changes, but for a chain's base tilt its
+    /// base joint's row alone. A tilt's signature is the gravity effort it puts on the vertical
+    /// base joint, which the level model has none of and no error of its first moments can make
+    /// (gravity has no moment about a vertical axis); on the joints beyond it looks like those
+    /// errors, and judged there too a real Panda's 0.5° "tilt" took in part of its shoulder's
+    /// friction (which then read as damping). It is still fitted on every joint it loads.
     fn rows_of(&self, c: usize) -> Vec<usize> {
+        if self.candidates[c].is_base_tilt() {
+            return vec![self.candidates[c].row];
+        }
         self.candidates[c]
             .columns
             .iter()
@@ -2219,6 +2295,7 @@ impl EffortProblem<'_> {
                 e.params[0] >= 0.0 && e.params[1] > e.params[0] && !self.rules.breakaway_beyond_ratio(e.params[0], e.params[1])
             }
             EffectKind::ViscousDamping | EffectKind::Armature | EffectKind::SoftClose | EffectKind::Spring => e.params[0] >= 0.0,
+            EffectKind::GravityTilt if e.params.len() == BASE_TILT_PARAMS => e.params[0] <= self.rules.max_base_tilt_deg.to_radians().tan(),
             _ => true,
         }
     }
@@ -2791,6 +2868,13 @@ impl EffortProblem<'_> {
             EffectKind::CoulombFriction => vec![t[0], cand.hyper[0], f64::NAN],
             EffectKind::StribeckFriction => vec![t[0], t[0] + t[1], cand.hyper[0]],
             EffectKind::Spring => vec![t[0], if t[0].abs() > 1e-12 { t[1] / t[0] } else { 0.0 }],
+            // A base tilt ([`super::tilt`]): its lean w along the two directions, tan tilt = |w|.
+            EffectKind::GravityTilt if cand.is_base_tilt() => {
+                let w = t[0] * DVec3::from_slice(&cand.hyper[..3]) + t[1] * DVec3::from_slice(&cand.hyper[3..]);
+                let params = vec![t[0].hypot(t[1]), t[1].atan2(t[0]), w.x, w.y, w.z];
+                debug_assert_eq!(params.len(), BASE_TILT_PARAMS);
+                params
+            }
             EffectKind::GravityTilt => vec![t[0].hypot(t[1]), t[1].atan2(t[0])],
             EffectKind::MassScale => vec![1.0 + t[0]],
             EffectKind::SoftClose => vec![t[0], cand.hyper[0]],
@@ -3083,6 +3167,8 @@ impl EffortProblem<'_> {
                 "over the swing recorded a spring and a tilted axis (a sine of the angle) pull alike; a wider swing tells them apart",
                 if cand.kind == EffectKind::Spring {
                     format!("a spring of {:.4} N·m/rad towards {:.3} rad", params[0], params[1])
+                } else if params.len() == BASE_TILT_PARAMS {
+                    format!("the base tilted {:.2}°, the joint pulled towards {:.3} rad", params[0].atan().to_degrees(), params[1])
                 } else {
                     format!("a tilted axis whose gravity pulls towards {:.3} rad, {:.4} N·m at its peak", params[1], params[0])
                 },

@@ -15,6 +15,7 @@ use super::effort::{in_serial_chain, moving_part};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
 use super::stops::{FoundStop, StopRules, find_stops};
+use super::tilt::{base_lean, world_from_base};
 use super::{GapConfig, GapError, GapModel, Given, JointOutcome, Recording, effect_report, rmse_pair};
 use crate::dynamics::MultiBody;
 
@@ -109,15 +110,20 @@ fn touch_through_gaps(touching: &mut [bool], time_s: &[f64], y: &[f64], narrow_s
     }
 }
 
-/// The physics of every dof under `effects` (per model joint), and the tree with heavier parts.
+/// The physics of every dof under `effects` (per model joint), and the tree with heavier parts
+/// and its base turned by a base tilt (under `gravity`).
 fn fitted_physics(
     model: &GapModel,
     tree: &MultiBody,
     body_of_link: &[Option<usize>],
     effects: &BTreeMap<usize, Vec<Effect>>,
     first_moments: &[(usize, DVec3)],
+    gravity: DVec3,
 ) -> (Vec<JointPhysics>, MultiBody) {
     let mut scaled = tree.clone();
+    for w in effects.values().flatten().filter_map(base_lean) {
+        scaled = scaled.with_base_rotated(world_from_base(w, gravity.normalize_or_zero()));
+    }
     let physics = model
         .dofs()
         .into_iter()
@@ -357,8 +363,14 @@ impl HeldOutReplay<'_> {
     /// The chain under `findings` replayed through the held-out part (samples from `t_split`
     /// on) in pieces of `horizon_s`, each from the measured state.
     fn replay(&self, findings: &[JointFinding], sig: &Signals, horizon_s: f64) -> Vec<Vec<f64>> {
-        let (physics, fitted) =
-            fitted_physics(self.model, self.tree, self.body_of_link, &effects_by_joint(findings), &first_moments_of(findings));
+        let (physics, fitted) = fitted_physics(
+            self.model,
+            self.tree,
+            self.body_of_link,
+            &effects_by_joint(findings),
+            &first_moments_of(findings),
+            self.input.gravity,
+        );
         replay_pieces(&fitted, &physics, self.input, sig, self.t_split, horizon_s)
     }
 
@@ -853,7 +865,7 @@ pub(super) fn analyze_effort_space(
     // pieces from the measured state ([`Bandwidth::held_out_horizon_s`]).
     let start = replay_start(&found.sig, rec.time_s.first().copied().unwrap_or(0.0));
     let horizon_s = found.horizon_s;
-    let (nominal_physics, _) = fitted_physics(model, &tree, &body_of_link, &BTreeMap::new(), &[]);
+    let (nominal_physics, _) = fitted_physics(model, &tree, &body_of_link, &BTreeMap::new(), &[], gravity);
     let held_before = replay_pieces(&tree, &nominal_physics, &input, &found.sig, t_split, horizon_s);
     let replay = HeldOutReplay {
         model,
@@ -874,7 +886,7 @@ pub(super) fn analyze_effort_space(
     let Identified { band, sig, rows, train_findings, .. } = found;
     let rows = rows.as_slice();
     let first_moments = first_moments_of(&findings);
-    let (physics, tree_fitted) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(&findings), &first_moments);
+    let (physics, tree_fitted) = fitted_physics(model, &tree, &body_of_link, &effects_by_joint(&findings), &first_moments, gravity);
     let (before, after) = rayon::join(
         || replay_from(&tree, &nominal_physics, &input, &sig, start),
         || replay_from(&tree_fitted, &physics, &input, &sig, start),

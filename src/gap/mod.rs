@@ -30,6 +30,7 @@ pub mod select;
 pub mod sim;
 pub mod smooth;
 pub mod stops;
+pub mod tilt;
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -420,7 +421,7 @@ fn analyze_joint(
     let unit = if joint.kind.is_rotational() { "rad" } else { "m" };
     let mismatches: Vec<Mismatch> = spans.iter().map(|s| describe_mismatch(rec, joint, y, &derivs, &residual, *s)).collect();
 
-    let vertical = effort::tilt_applies(model, j, gravity.normalize_or_zero());
+    let vertical = tilt::tilt_applies(model, j, gravity.normalize_or_zero());
     let candidates: Vec<EffectKind> =
         EffectKind::FITTABLE.into_iter().filter(|k| k.applies_to(joint.kind) && (*k != EffectKind::GravityTilt || vertical)).collect();
     let select_here = || {
@@ -1145,6 +1146,26 @@ fn effect_report(
             put("stiffness", x[0], sd[0]);
             put("rest_position", x[1], sd[1]);
             format!("spring {:.4} {force}/{length} towards {:.3} {length}", x[0], x[1])
+        }
+        EffectKind::GravityTilt if tilt::base_lean(e).is_some() => {
+            let w = tilt::base_lean(e).unwrap_or_default();
+            let tilt_rad = x[0].atan();
+            let (axis, _) = tilt::world_from_base(w, gravity.normalize_or_zero()).to_axis_angle();
+            let eq = (x[1] + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+            put("tilt_deg", tilt_rad.to_degrees(), (sd[0] / (1.0 + x[0] * x[0])).to_degrees());
+            put("equilibrium_position", eq, sd[1]);
+            // The turn's axis in the root link's frame: what the fitted URDF turns the base by.
+            for (name, v) in ["tilt_axis_x", "tilt_axis_y", "tilt_axis_z"].into_iter().zip(axis.to_array()) {
+                put(name, v, f64::NAN);
+            }
+            format!(
+                "the base is tilted {:.2}° from the model about ({:.3}, {:.3}, {:.3}), everything beyond this joint with it; \
+                 a part along the joint's x axis rests at {eq:.3} rad",
+                tilt_rad.to_degrees(),
+                axis.x,
+                axis.y,
+                axis.z
+            )
         }
         EffectKind::GravityTilt => {
             let lever = terms.subtree_mass_kg * gravity.length() * terms.com_radius_m;

@@ -3,10 +3,11 @@
 
 use std::collections::BTreeMap;
 
+use glam::{DQuat, DVec3};
 use serde::Serialize;
 
 use super::effects::EffectKind;
-use super::model::GapModel;
+use super::model::{GapModel, Iso};
 
 /// The report's `format` value.
 pub const REPORT_FORMAT: &str = "partscene-gap-report/1";
@@ -224,6 +225,7 @@ pub fn fitted_urdf(
             }
         }
     }
+    turn_tilted_base(model, effects, &mut robot);
     for joint in &mut robot.joints {
         for e in effects.iter().filter(|e| e.joint == joint.name) {
             let kind = EffectKind::from_name(&e.kind);
@@ -261,6 +263,27 @@ pub fn fitted_urdf(
     urdf_rs::write_to_string(&robot).map_err(|e| super::error::GapError::Urdf { file: model.file.clone(), message: e.to_string() })
 }
 
+/// A chain's base tilt ([`super::tilt`]; a `gravity_tilt` with its turn's axis) places every
+/// joint on the root link by the turn: the fitted URDF stands as tilted as the recording showed.
+fn turn_tilted_base(model: &GapModel, effects: &[EffectReport], robot: &mut urdf_rs::Robot) {
+    for e in effects.iter().filter(|e| e.kind == EffectKind::GravityTilt.name()) {
+        let p = |name: &str| e.params.get(name).copied();
+        let (Some(x), Some(y), Some(z), Some(tilt_deg)) = (p("tilt_axis_x"), p("tilt_axis_y"), p("tilt_axis_z"), p("tilt_deg")) else {
+            continue;
+        };
+        let Some(axis) = DVec3::new(x, y, z).try_normalize() else { continue };
+        let turn = DQuat::from_axis_angle(axis, tilt_deg.to_radians());
+        let root = &model.links[model.root].name;
+        for joint in robot.joints.iter_mut().filter(|j| &j.parent.link == root) {
+            let origin = Iso::from_urdf(&joint.origin);
+            joint.origin = urdf_rs::Pose {
+                xyz: urdf_rs::Vec3((turn * origin.translation).to_array()),
+                rpy: urdf_rs::Vec3(crate::math::dquat_to_rpy(turn * origin.rotation)),
+            };
+        }
+    }
+}
+
 /// The sidecar JSON: every effect (including those URDF cannot express), machine-readable.
 #[must_use]
 pub fn sidecar_json(report: &GapReport, model_file: &str) -> String {
@@ -274,7 +297,8 @@ pub fn sidecar_json(report: &GapReport, model_file: &str) -> String {
             "coulomb_friction -> <dynamics friction> (the mean of both directions; transition_speed and friction_reverse only here)",
             "stribeck_friction -> <dynamics friction> (the sliding level; breakaway and stribeck_speed only here)",
             "end_stop -> <limit> (restitution, and a compliant stop's contact_time, stiffness and damping, only here; MJCF: range, solreflimit)",
-            "armature, effort_offset, mass_scale, spring, gravity_tilt, soft_close -> only here (MJCF: armature, stiffness/springref)"
+            "gravity_tilt of a chain's base joint -> the <origin> of every joint on the root link, turned by tilt_deg about tilt_axis",
+            "armature, effort_offset, mass_scale, spring, gravity_tilt of a lone joint, soft_close -> only here (MJCF: armature, stiffness/springref)"
         ],
     });
     serde_json::to_string_pretty(&value).unwrap_or_default()
