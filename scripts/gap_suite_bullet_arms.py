@@ -184,7 +184,7 @@ def run_case(case, seed, out):
     nominal = BulletArm(model_text, joints, [0.0] * 7, [0.0] * 7)
     gravity = gs.tilted_gravity(*case.base_tilt) if case.base_tilt else gs.GRAVITY
     plant = BulletArm(engine_text, joints, case.friction, case.damping, gravity)
-    tilt = base_tilt_truth(plant, case) if case.base_tilt else None
+    tilt = base_tilt_effect(plant, case) if case.base_tilt else None
     traj, table, effort_sigma = drive(plant, nominal, case, rng)
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
@@ -228,7 +228,7 @@ def drive(plant, nominal, case, rng, offsets=None):
     return traj, table, effort_sigma
 
 
-def base_tilt_truth(plant, case):
+def base_tilt_effect(plant, case):
     """The gravity_tilt of the case's base tilt on the robot's first joint (gap_suite.lean_equilibrium), from the
     engine's own frames at the zero pose."""
     for i in plant.idx:

@@ -370,12 +370,23 @@ impl Signals {
         self.filtered(&self.q[d], keep, f)
     }
 
+    /// Each series (one per dof) parallel-filtered like the efforts, NaN outside the usable samples.
+    fn filtered_usable(&self, series: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        series
+            .iter()
+            .map(|x| self.filter.apply(x).into_iter().enumerate().map(|(i, y)| if self.usable[i] { y } else { f64::NAN }).collect())
+            .collect()
+    }
+
     /// `f` of each sample of `motion`, filtered like the efforts; NaN outside `keep`.
     fn filtered(&self, motion: &[[f64; 3]], keep: &[bool], f: &dyn Fn([f64; 3]) -> f64) -> Vec<f64> {
         let values: Vec<f64> = motion.iter().map(|&x| if x.iter().all(|v| v.is_finite()) { f(x) } else { f64::NAN }).collect();
         self.filter.apply(&values).into_iter().zip(keep).map(|(v, &k)| if k { v } else { f64::NAN }).collect()
     }
 }
+
+/// Hyper-parameters of a base-tilt candidate: its two horizontal directions (world frame).
+const BASE_TILT_HYPER: usize = 6;
 
 /// One candidate term on one joint: its kind, its hyper-parameters, its regressor columns.
 #[derive(Debug, Clone)]
@@ -399,7 +410,7 @@ struct Candidate {
 impl Candidate {
     /// A chain's base tilt ([`super::tilt`]): its hyper-parameters are its two directions.
     fn is_base_tilt(&self) -> bool {
-        self.kind == EffectKind::GravityTilt && self.hyper.len() == 6
+        self.kind == EffectKind::GravityTilt && self.hyper.len() == BASE_TILT_HYPER
     }
 
     /// A law that extends its family's base law with more parameters (Stribeck's break-away
@@ -929,6 +940,7 @@ struct ModelEfforts {
 struct BaseTiltEfforts {
     /// The base joint's index among the effort joints (the candidate's row).
     row: usize,
+    /// The two horizontal unit directions of the columns, world frame.
     directions: [DVec3; 2],
     /// Parallel-filtered like the measured efforts, NaN outside the usable samples.
     filtered: [Vec<Vec<f64>>; 2],
@@ -949,11 +961,7 @@ fn base_tilt_efforts(
     let row = effort_joints.iter().position(|&x| x == j)?;
     let directions = tilt_directions(model, j, gravity.normalize_or_zero())?;
     let (raw, size) = rayon::join(|| tilt_efforts(tree, &sig.raw, gravity, directions), || tilt_efforts(tree, &sig.q, gravity, directions));
-    let filtered = raw.map(|dofs| {
-        dofs.iter()
-            .map(|x| sig.filter.apply(x).into_iter().enumerate().map(|(i, y)| if sig.usable[i] { y } else { f64::NAN }).collect())
-            .collect()
-    });
+    let filtered = raw.map(|dofs| sig.filtered_usable(&dofs));
     Some(BaseTiltEfforts { row, directions, filtered, size })
 }
 
@@ -994,11 +1002,7 @@ fn model_efforts(model: &GapModel, tree: &MultiBody, sig: &Signals, gravity: DVe
     let (raw, size) =
         rayon::join(|| efforts_at(model, tree, &sig.raw, gravity, bodies), || efforts_at(model, tree, &sig.q, gravity, bodies));
     // Parallel filtering: each term passes the filter the measured efforts passed.
-    let filtered = |v: Vec<Vec<f64>>| -> Vec<Vec<f64>> {
-        v.iter()
-            .map(|x| sig.filter.apply(x).into_iter().enumerate().map(|(i, y)| if sig.usable[i] { y } else { f64::NAN }).collect())
-            .collect()
-    };
+    let filtered = |v: Vec<Vec<f64>>| -> Vec<Vec<f64>> { sig.filtered_usable(&v) };
     let filtered = Efforts {
         tau: filtered(raw.tau),
         gravity: filtered(raw.gravity),
@@ -1540,20 +1544,25 @@ impl EffortProblem<'_> {
     fn push_base_tilt(&self, sink: &mut CandidateSink, r: usize, me: &ModelEfforts, n: usize) {
         let Some(bt) = me.base_tilt.as_ref().filter(|bt| bt.row == r) else { return };
         let d = self.rows[r].dof;
-        let mut columns = Vec::new();
-        for k in 0..2 {
-            let mut rows = BTreeMap::new();
-            for (rr, info) in self.rows.iter().enumerate() {
-                let values: Vec<f64> = (0..n).map(|i| if self.used[rr][i] { bt.filtered[k][info.dof][i] } else { f64::NAN }).collect();
-                if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
-                    rows.insert(rr, values);
+        let made: Vec<Column> = (0..2)
+            .map(|k| {
+                let mut rows = BTreeMap::new();
+                for (rr, info) in self.rows.iter().enumerate() {
+                    let values: Vec<f64> = (0..n).map(|i| if self.used[rr][i] { bt.filtered[k][info.dof][i] } else { f64::NAN }).collect();
+                    if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
+                        rows.insert(rr, values);
+                    }
                 }
-            }
-            if !rows.contains_key(&r) {
-                return;
-            }
-            let size = (0..n).map(|i| if self.used[r][i] { bt.size[k][d][i] } else { f64::NAN }).collect();
-            sink.columns.push(Column { rows, size, precision: 0.0 });
+                let size = (0..n).map(|i| if self.used[r][i] { bt.size[k][d][i] } else { f64::NAN }).collect();
+                Column { rows, size, precision: 0.0 }
+            })
+            .collect();
+        if !made.iter().all(|c| c.rows.contains_key(&r)) {
+            return;
+        }
+        let mut columns = Vec::new();
+        for column in made {
+            sink.columns.push(column);
             columns.push(sink.columns.len() - 1);
         }
         let hyper = bt.directions.iter().flat_map(DVec3::to_array).collect();
@@ -2041,7 +2050,8 @@ impl EffortProblem<'_> {
     /// base joint, which the level model has none of and no error of its first moments can make
     /// (gravity has no moment about a vertical axis); on the joints beyond it looks like those
     /// errors, and judged there too a real Panda's 0.5° "tilt" took in part of its shoulder's
-    /// friction (which then read as damping). It is still fitted on every joint it loads.
+    /// friction (which then read as damping). It is still fitted on every joint it loads, and may
+    /// not enter where it raises the held-out error summed over them all.
     fn rows_of(&self, c: usize) -> Vec<usize> {
         if self.candidates[c].is_base_tilt() {
             return vec![self.candidates[c].row];
@@ -2281,7 +2291,8 @@ impl EffortProblem<'_> {
     }
 
     /// Whether the fitted parameters of candidate c are physical (a heavier part within the
-    /// plausible range, non-negative friction and damping levels).
+    /// plausible range, non-negative friction and damping levels, a base tilted at most
+    /// [`SelectionRules::max_base_tilt_deg`]).
     fn plausible(&self, c: usize, theta: &Params) -> bool {
         if self.candidates[c].unresolved.is_some() {
             return false;
@@ -2295,7 +2306,7 @@ impl EffortProblem<'_> {
                 e.params[0] >= 0.0 && e.params[1] > e.params[0] && !self.rules.breakaway_beyond_ratio(e.params[0], e.params[1])
             }
             EffectKind::ViscousDamping | EffectKind::Armature | EffectKind::SoftClose | EffectKind::Spring => e.params[0] >= 0.0,
-            EffectKind::GravityTilt if e.params.len() == BASE_TILT_PARAMS => e.params[0] <= self.rules.max_base_tilt_deg.to_radians().tan(),
+            EffectKind::GravityTilt if e.params.len() == BASE_TILT_PARAMS => e.params[0] <= self.rules.max_base_tilt_deg.to_radians().sin(),
             _ => true,
         }
     }
@@ -2755,6 +2766,11 @@ impl EffortProblem<'_> {
                 if !self.cuts_held_out(current, &e, &rows, c) {
                     return None;
                 }
+                // Judged on its base joint, a base tilt still refits every joint it loads: it may
+                // not raise the held-out error summed over them all (as a swap may not, `replace`).
+                if self.candidates[c].is_base_tilt() && self.evaluate(&self.with(chosen, c)).total_sse() > current.total_sse() {
+                    return None;
+                }
                 let v = self.verdict(current, &e, &rows, c, self.family_member(chosen, c));
                 self.passes(&v).then_some((c, v.gain))
             })
@@ -2868,7 +2884,7 @@ impl EffortProblem<'_> {
             EffectKind::CoulombFriction => vec![t[0], cand.hyper[0], f64::NAN],
             EffectKind::StribeckFriction => vec![t[0], t[0] + t[1], cand.hyper[0]],
             EffectKind::Spring => vec![t[0], if t[0].abs() > 1e-12 { t[1] / t[0] } else { 0.0 }],
-            // A base tilt ([`super::tilt`]): its lean w along the two directions, tan tilt = |w|.
+            // A base tilt ([`super::tilt`]): its lean w along the two directions, sin tilt = |w|.
             EffectKind::GravityTilt if cand.is_base_tilt() => {
                 let w = t[0] * DVec3::from_slice(&cand.hyper[..3]) + t[1] * DVec3::from_slice(&cand.hyper[3..]);
                 let params = vec![t[0].hypot(t[1]), t[1].atan2(t[0]), w.x, w.y, w.z];
@@ -3168,7 +3184,7 @@ impl EffortProblem<'_> {
                 if cand.kind == EffectKind::Spring {
                     format!("a spring of {:.4} N·m/rad towards {:.3} rad", params[0], params[1])
                 } else if params.len() == BASE_TILT_PARAMS {
-                    format!("the base tilted {:.2}°, the joint pulled towards {:.3} rad", params[0].atan().to_degrees(), params[1])
+                    format!("the base tilted {:.2}°, the joint pulled towards {:.3} rad", params[0].min(1.0).asin().to_degrees(), params[1])
                 } else {
                     format!("a tilted axis whose gravity pulls towards {:.3} rad, {:.4} N·m at its peak", params[1], params[0])
                 },
@@ -3262,6 +3278,11 @@ impl EffortProblem<'_> {
             why
         } else if let Some(why) = &self.candidates[c].unresolved {
             why.clone()
+        } else if !v.plausible && self.candidates[c].is_base_tilt() {
+            format!(
+                "it fits the base tilted beyond {}°, steeper than a robot stands: the tilt would be taking in something else",
+                self.rules.max_base_tilt_deg
+            )
         } else if !v.plausible {
             format!(
                 "its fitted parameters are not physical or not material (a negative level; a part within 10 % of, or far from, its modelled weight; a break-away beyond {}× the sliding friction)",

@@ -1147,26 +1147,7 @@ fn effect_report(
             put("rest_position", x[1], sd[1]);
             format!("spring {:.4} {force}/{length} towards {:.3} {length}", x[0], x[1])
         }
-        EffectKind::GravityTilt if tilt::base_lean(e).is_some() => {
-            let w = tilt::base_lean(e).unwrap_or_default();
-            let tilt_rad = x[0].atan();
-            let (axis, _) = tilt::world_from_base(w, gravity.normalize_or_zero()).to_axis_angle();
-            let eq = (x[1] + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
-            put("tilt_deg", tilt_rad.to_degrees(), (sd[0] / (1.0 + x[0] * x[0])).to_degrees());
-            put("equilibrium_position", eq, sd[1]);
-            // The turn's axis in the root link's frame: what the fitted URDF turns the base by.
-            for (name, v) in ["tilt_axis_x", "tilt_axis_y", "tilt_axis_z"].into_iter().zip(axis.to_array()) {
-                put(name, v, f64::NAN);
-            }
-            format!(
-                "the base is tilted {:.2}° from the model about ({:.3}, {:.3}, {:.3}), everything beyond this joint with it; \
-                 a part along the joint's x axis rests at {eq:.3} rad",
-                tilt_rad.to_degrees(),
-                axis.x,
-                axis.y,
-                axis.z
-            )
-        }
+        EffectKind::GravityTilt if x.len() == tilt::BASE_TILT_PARAMS => base_tilt_text(x, sd, gravity, &mut put),
         EffectKind::GravityTilt => {
             let lever = terms.subtree_mass_kg * gravity.length() * terms.com_radius_m;
             let ratio = if lever > 0.0 { (x[0] / lever).clamp(-1.0, 1.0) } else { 0.0 };
@@ -1213,6 +1194,29 @@ fn effect_report(
         EffectKind::Unknown => String::new(),
     };
     EffectReport { joint: joint.name.clone(), kind: e.kind.name().into(), params, uncertainty: unc, confidence, description }
+}
+
+/// The report of a chain's base tilt (internal parameters [`tilt::BASE_TILT_PARAMS`]): its
+/// `tilt_deg`, the base joint's `equilibrium_position` and the turn's axis in the root link's
+/// frame (`tilt_axis_x/y/z`: what the fitted URDF turns the base by); `put` records each.
+fn base_tilt_text(x: &[f64], sd: &[f64], gravity: DVec3, put: &mut impl FnMut(&str, f64, f64)) -> String {
+    let w = DVec3::new(x[2], x[3], x[4]);
+    let tilt_rad = tilt::tilt_rad(w);
+    let (axis, _) = tilt::world_from_base(w, gravity.normalize_or_zero()).to_axis_angle();
+    let eq = (x[1] + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+    put("tilt_deg", tilt_rad.to_degrees(), (sd[0] / tilt_rad.cos().max(1e-6)).to_degrees());
+    put("equilibrium_position", eq, sd[1]);
+    for (name, v) in ["tilt_axis_x", "tilt_axis_y", "tilt_axis_z"].into_iter().zip(axis.to_array()) {
+        put(name, v, f64::NAN);
+    }
+    format!(
+        "the base is tilted {:.2}° from the model about ({:.3}, {:.3}, {:.3}), everything beyond this joint with it; \
+         a part along the joint's x axis rests at {eq:.3} rad",
+        tilt_rad.to_degrees(),
+        axis.x,
+        axis.y,
+        axis.z
+    )
 }
 
 /// Writes `report.json`, the fitted URDF, `model.fitted.json` and one SVG per joint into `dir`.

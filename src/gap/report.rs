@@ -190,8 +190,9 @@ pub struct GapReport {
 }
 
 /// The fitted URDF: the model's text with `<dynamics damping friction>` raised by the found
-/// viscous damping and Coulomb friction, `<limit>` narrowed by found end stops, and centres of
-/// mass moved by `com_shift_m` (link name → shift in the link frame, m).
+/// viscous damping and Coulomb friction, `<limit>` narrowed by found end stops, centres of mass
+/// moved by `com_shift_m` (link name → shift in the link frame, m) and the joints on the root
+/// link turned by a chain's base tilt (the root link's own geometry stays as it was).
 pub fn fitted_urdf(
     model: &GapModel,
     effects: &[EffectReport],

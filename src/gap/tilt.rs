@@ -17,7 +17,7 @@
 //! The term is fitted on every joint it loads and judged (its held-out cut, its replay) on the
 //! base joint alone ([`super::effort`]'s `rows_of`): there a level model has no gravity effort and
 //! no error of its first moments can make one, while on the joints beyond a tilt looks like those
-//! errors.
+//! errors. It may not enter where it raises the held-out error summed over every joint.
 //!
 //! The fitted model carries the tilt exactly: the tree's base turned ([`world_from_base`],
 //! [`crate::dynamics::MultiBody::with_base_rotated`]) in the replays, and the fitted URDF's joints
@@ -28,6 +28,10 @@ use rayon::prelude::*;
 
 use super::model::{DofKind, GapModel};
 use crate::dynamics::MultiBody;
+
+/// Internal parameters of a base tilt: sin tilt, the base joint's equilibrium, and the lean w
+/// (3 components, base frame; [`world_from_base`]).
+pub const BASE_TILT_PARAMS: usize = 5;
 
 /// Largest angle between a joint's axis and the vertical for which `gravity_tilt` is a candidate.
 /// A tilt makes gravity act on a joint whose model says it does not (a door hinge); on a joint
@@ -108,28 +112,30 @@ pub fn tilt_efforts(tree: &MultiBody, q_of: &[Vec<[f64; 3]>], gravity: DVec3, di
 }
 
 /// The turn of the base (world ← base) under which gravity, seen from the base, leans by `w`
-/// (the horizontal components a tilt adds to the unit gravity direction, in the base's frame):
-/// the base sees gravity along normalize(ĝ + w).
+/// (the horizontal part of the unit gravity direction in the base's frame, |w| = sin tilt, what
+/// the two columns fit to first order): the base sees gravity along w + ĝ √(1 − |w|²).
 #[must_use]
 pub fn world_from_base(w: DVec3, gravity_dir: DVec3) -> DQuat {
-    let seen = (gravity_dir + w).normalize_or_zero();
+    let seen = (w + gravity_dir * (1.0 - w.length_squared()).max(0.0).sqrt()).normalize_or_zero();
     if seen == DVec3::ZERO || gravity_dir == DVec3::ZERO {
         return DQuat::IDENTITY;
     }
     DQuat::from_rotation_arc(seen, gravity_dir)
 }
 
+/// The tilt of a base whose gravity leans by `w` ([`world_from_base`]), rad.
+#[must_use]
+pub fn tilt_rad(w: DVec3) -> f64 {
+    w.length().min(1.0).asin()
+}
+
 /// The base tilt an effect's parameters describe, if it is one: `gravity_tilt` on a chain's
-/// base joint carries (tan tilt, equilibrium, w) with w the lean of gravity in the base's frame.
+/// base joint carries (sin tilt, equilibrium, w) with w the lean of gravity in the base's frame.
 #[must_use]
 pub fn base_lean(effect: &super::effects::Effect) -> Option<DVec3> {
     (effect.kind == super::effects::EffectKind::GravityTilt && effect.params.len() == BASE_TILT_PARAMS)
         .then(|| DVec3::new(effect.params[2], effect.params[3], effect.params[4]))
 }
-
-/// Internal parameters of a base tilt: tan tilt, equilibrium of the base joint, and the lean w
-/// (3 components, base frame).
-pub const BASE_TILT_PARAMS: usize = 5;
 
 #[cfg(test)]
 mod tests {
