@@ -28,6 +28,9 @@ Concealed effects, each made the way Drake's API makes it:
                     reflected inertia rho^2 I_r on the mass matrix's diagonal
   effort_offset     a constant added to the recorded effort (a torque sensor's bias), not engine physics; truth.json's
                     offset is minus it (the spec's offset adds to the recorded effort to give the felt one)
+  gravity_tilt      of the base joint: the plant's gravity field leaning by tilt_deg (the whole robot stands
+                    tilted, model.urdf level); equilibrium_position as gap_suite.lean_equilibrium says, from the
+                    plant's own frames
 
 Checks (a failure stops the run), per case before it is recorded:
   rigid bodies  Drake's joint-space inertia and bias force (CalcMassMatrix, CalcBiasTerm -
@@ -114,6 +117,8 @@ def cases():
                 damping=[0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0], armature=PANDA_ROTOR),
         ArmCase("drake_panda_identified_model", "Panda; smooth dry friction on every joint, model.urdf's inertias up "
                 "to 5 % off", "panda", friction=PANDA_FRICTION, model_error=0.05),
+        ArmCase("drake_panda_tilted_base", "Panda on a base tilted 0.8 deg (model.urdf level); smooth dry friction on "
+                "joints 1-4", "panda", friction=[1.0, 1.0, 0.8, 0.8, 0.0, 0.0, 0.0], base_tilt=(0.8, 0.6)),
     ]
 
 
@@ -156,14 +161,14 @@ class DrakeArm(gap_suite_drake.DrakeSim):
     """An arm in a discrete MultibodyPlant of its own, loaded from URDF text, with DoorHinge friction, joint damping
     and rotor inertia per joint (`joints`, in order): gap_suite_drake.DrakeSim's stepping, state and dynamics."""
 
-    def __init__(self, text, joints, friction=None, damping=None, armature=None):  # noqa: DrakeSim builds from mechanisms
+    def __init__(self, text, joints, friction=None, damping=None, armature=None, gravity=gs.GRAVITY):  # noqa: DrakeSim builds from mechanisms
         n = len(joints)
         friction, damping, armature = (np.zeros(n) if x is None else np.asarray(x, float) for x in (friction, damping, armature))
         self.plant = MultibodyPlant(time_step=DT)
         self.plant.set_discrete_contact_approximation(DiscreteContactApproximation.kLagged)
         (instance,) = Parser(self.plant).AddModelsFromString(text, "urdf")
         self.plant.WeldFrames(self.plant.world_frame(), self.plant.GetBodyByName(root_link(text), instance).body_frame())
-        self.plant.mutable_gravity_field().set_gravity_vector(np.array(gs.GRAVITY))
+        self.plant.mutable_gravity_field().set_gravity_vector(np.array(gravity))
         self.names = list(joints)
         self.joints = [self.plant.GetJointByName(name, instance) for name in joints]
         for joint, f, b, a in zip(self.joints, friction, damping, armature):
@@ -228,6 +233,17 @@ def check_effects(plant, bare, case, rng):
         raise SuiteError(f"{case.name}: Drake's rotors add {np.diag(added)} of inertia, {case.armature} was set")
 
 
+def base_tilt_effect(plant, case):
+    """The gravity_tilt of the case's base tilt on the robot's first joint (gap_suite.lean_equilibrium), from the
+    plant's own frames at the zero pose."""
+    plant.set_state(np.zeros(len(plant.names)), np.zeros(len(plant.names)))
+    first = plant.joints[0]
+    rot = first.frame_on_child().CalcPoseInWorld(plant.context).rotation().matrix()
+    tilt_deg, toward = case.base_tilt
+    return bullet.Effect(plant.names[0], "gravity_tilt",
+                         {"tilt_deg": tilt_deg, "equilibrium_position": gs.lean_equilibrium(rot, first.revolute_axis(), toward)})
+
+
 def run_case(case, seed, out):
     rng = gs.case_rng(seed, case.name)
     robot = bullet.ROBOTS[case.robot]
@@ -237,14 +253,22 @@ def run_case(case, seed, out):
     check_rigid(bare, engine_text, rng)
     model_text = bullet.identified(engine_text, case.model_error, rng) if case.model_error > 0 else engine_text
     nominal = DrakeArm(model_text, joints)
-    plant = DrakeArm(engine_text, joints, case.friction, case.damping, case.armature)
+    gravity = gs.tilted_gravity(*case.base_tilt) if case.base_tilt else gs.GRAVITY
+    plant = DrakeArm(engine_text, joints, case.friction, case.damping, case.armature, gravity)
     check_effects(plant, bare, case, rng)
     bare.close()
+    tilt = base_tilt_effect(plant, case) if case.base_tilt else None
     traj, table, effort_sigma = bullet.drive(plant, nominal, case, rng, case.offset)
     source_path = "/".join(robot.path)
     note = f"pybullet_data {source_path} without geometry and without joint damping, fingers (if any) welded"
     note += "; inertial parameters drawn up to 5 % off (an identified model)" if case.model_error > 0 else ""
     model_effort = gs.inverse_dynamics(nominal, traj, np.gradient(traj.qd, traj.t, axis=0))
+    tilt_effort = None
+    if tilt is not None:
+        tilted = DrakeArm(model_text, joints, gravity=gravity)
+        zero = np.zeros(len(joints))
+        tilt_effort = np.array([tilted.dynamics(q, zero)[1] - nominal.dynamics(q, zero)[1] for q in traj.q])
+        tilted.close()
     nominal.close()
     detail = {
         "coulomb_friction": f"DoorHinge force element, dynamic_friction_torque = friction, motion_threshold = "
@@ -254,11 +278,13 @@ def run_case(case, seed, out):
                     "inertia), actuation input zero",
         "effort_offset": "minus the bias added to the recorded effort (a torque sensor's): the joint felt the recorded "
                          "effort + offset",
+        "gravity_tilt": f"the plant's gravity field {tuple(round(g, 6) for g in gravity)}: the whole robot stands tilted",
     }
     engine_detail = (f"{ENGINE}, {note}; discrete MultibodyPlant (SAP, kLagged), root welded, {DT} s steps "
                      "(ExecuteForcedEvents), efforts through the applied generalized force port, held between samples; "
                      f"rigid bodies checked against MuJoCo's reading of the same URDF to {CHECK_RTOL:g}")
-    truth = bullet.arm_truth(ENGINE, case, seed, (detail, engine_detail), traj, effort_sigma, model_effort)
+    truth = bullet.arm_truth(ENGINE, case, seed, (detail, engine_detail), traj, effort_sigma, model_effort,
+                             (tilt, tilt_effort))
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
