@@ -50,11 +50,23 @@ pub fn first_moment_efforts(
     gravity: DVec3,
     bodies: &[usize],
 ) -> BTreeMap<usize, [Vec<Vec<f64>>; 3]> {
-    let nd = q_of.len();
-    let n = q_of.first().map_or(0, Vec::len);
     let unit = |axis: DVec3| RigidInertia { mass_kg: 0.0, first_moment: axis, about_origin: DMat3::ZERO };
     let axes = [DVec3::X, DVec3::Y, DVec3::Z];
-    // Per sample: per body and axis, the efforts on every dof.
+    let mut series = at_rest_series(q_of, 3 * bodies.len(), |q| {
+        let k = tree.kinematics(q, &[], &[], gravity);
+        bodies.iter().flat_map(|&b| axes.map(|a| tree.efforts_with(&k, |x| (x == b).then(|| unit(a))))).collect()
+    })
+    .into_iter();
+    bodies.iter().map(|&b| (b, std::array::from_fn(|_| series.next().unwrap_or_default()))).collect()
+}
+
+/// `count` series of efforts over a recorded motion (`q_of`: per dof and sample, position first),
+/// each per dof and sample: `at(q)` gives, at each sample's positions, every series' efforts on
+/// every dof; NaN where the motion is not finite. The samples are evaluated in parallel.
+#[must_use]
+pub fn at_rest_series(q_of: &[Vec<[f64; 3]>], count: usize, at: impl Fn(&[f64]) -> Vec<Vec<f64>> + Sync) -> Vec<Vec<Vec<f64>>> {
+    let nd = q_of.len();
+    let n = q_of.first().map_or(0, Vec::len);
     let per_sample: Vec<Option<Vec<Vec<f64>>>> = (0..n)
         .into_par_iter()
         .map(|i| {
@@ -62,20 +74,10 @@ pub fn first_moment_efforts(
                 return None;
             }
             let q: Vec<f64> = q_of.iter().map(|d| d[i][0]).collect();
-            let k = tree.kinematics(&q, &[], &[], gravity);
-            Some(bodies.iter().flat_map(|&b| axes.map(|a| tree.efforts_with(&k, |x| (x == b).then(|| unit(a))))).collect())
+            Some(at(&q))
         })
         .collect();
-    bodies
-        .iter()
-        .enumerate()
-        .map(|(bi, &b)| {
-            let axis = |a: usize| -> Vec<Vec<f64>> {
-                (0..nd).map(|d| per_sample.iter().map(|s| s.as_ref().map_or(f64::NAN, |e| e[3 * bi + a][d])).collect()).collect()
-            };
-            (b, [axis(0), axis(1), axis(2)])
-        })
-        .collect()
+    (0..count).map(|k| (0..nd).map(|d| per_sample.iter().map(|s| s.as_ref().map_or(f64::NAN, |e| e[k][d])).collect()).collect()).collect()
 }
 
 /// The bodies beyond body `child` (it included): those whose chain of parents reaches it.

@@ -23,7 +23,7 @@ use super::accuracy::{bodies_beyond, first_moment_efforts, first_moment_prior};
 use super::effects::{Effect, EffectKind};
 use super::model::{DofKind, GapModel};
 use super::smooth::{GAUSS_HALF_GAIN_F_SIGMA, GAUSS_SUPPORT_SIGMAS, Smoother, local_cubic};
-use super::tilt::{BASE_TILT_PARAMS, base_joint, tilt_applies, tilt_directions, tilt_efforts};
+use super::tilt::{BASE_TILT_PARAMS, base_joint, base_lean, tilt_applies, tilt_directions, tilt_efforts};
 use crate::dynamics::MultiBody;
 use crate::linalg::{back_substitute, cholesky, forward_substitute, solve_spd};
 
@@ -1278,13 +1278,7 @@ impl<'a> EffortProblem<'a> {
 pub fn in_serial_chain(model: &GapModel, j: usize) -> bool {
     let movable_below =
         model.subtree(j).iter().skip(1).any(|&l| model.parent_joint[l].is_some_and(|k| model.joints[k].kind != DofKind::Fixed));
-    let mut link = model.joints[j].parent;
-    let mut movable_above = false;
-    while let Some(k) = model.parent_joint[link] {
-        movable_above |= model.joints[k].kind != DofKind::Fixed;
-        link = model.joints[k].parent;
-    }
-    movable_below || movable_above
+    movable_below || model.moving_joint_of(model.joints[j].parent).is_some()
 }
 
 /// Median (the upper middle value) of the finite values; 0 when there are none.
@@ -1546,13 +1540,7 @@ impl EffortProblem<'_> {
         let d = self.rows[r].dof;
         let made: Vec<Column> = (0..2)
             .map(|k| {
-                let mut rows = BTreeMap::new();
-                for (rr, info) in self.rows.iter().enumerate() {
-                    let values: Vec<f64> = (0..n).map(|i| if self.used[rr][i] { bt.filtered[k][info.dof][i] } else { f64::NAN }).collect();
-                    if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
-                        rows.insert(rr, values);
-                    }
-                }
+                let rows = self.rows_loaded(n, |d, i| bt.filtered[k][d][i]);
                 let size = (0..n).map(|i| if self.used[r][i] { bt.size[k][d][i] } else { f64::NAN }).collect();
                 Column { rows, size, precision: 0.0 }
             })
@@ -1577,6 +1565,19 @@ impl EffortProblem<'_> {
         });
     }
 
+    /// A column over every row: `value(dof, sample)` on each row's used samples (NaN elsewhere),
+    /// kept on the rows it loads (a finite value beyond 1e-12 somewhere).
+    fn rows_loaded(&self, n: usize, value: impl Fn(usize, usize) -> f64) -> BTreeMap<usize, Vec<f64>> {
+        let mut rows = BTreeMap::new();
+        for (rr, info) in self.rows.iter().enumerate() {
+            let values: Vec<f64> = (0..n).map(|i| if self.used[rr][i] { value(info.dof, i) } else { f64::NAN }).collect();
+            if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
+                rows.insert(rr, values);
+            }
+        }
+        rows
+    }
+
     /// The heavier-part candidate of row r: the effort of its moving part's inertia on every
     /// identified joint (a heavier forearm loads the shoulder too). Its column goes into `sink`;
     /// the candidate is returned for the caller to place.
@@ -1584,15 +1585,7 @@ impl EffortProblem<'_> {
         if part_of[r].is_empty() {
             return None;
         }
-        let mut rows = BTreeMap::new();
-        for (rr, info) in self.rows.iter().enumerate() {
-            let values: Vec<f64> = (0..n)
-                .map(|i| if self.used[rr][i] { part_of[r].iter().map(|b| me.filtered.body_tau[b][info.dof][i]).sum() } else { f64::NAN })
-                .collect();
-            if values.iter().any(|v| v.is_finite() && v.abs() > 1e-12) {
-                rows.insert(rr, values);
-            }
-        }
+        let rows = self.rows_loaded(n, |d, i| part_of[r].iter().map(|b| me.filtered.body_tau[b][d][i]).sum());
         rows.get(&r)?;
         let d = self.rows[r].dof;
         let size =
@@ -2306,7 +2299,7 @@ impl EffortProblem<'_> {
                 e.params[0] >= 0.0 && e.params[1] > e.params[0] && !self.rules.breakaway_beyond_ratio(e.params[0], e.params[1])
             }
             EffectKind::ViscousDamping | EffectKind::Armature | EffectKind::SoftClose | EffectKind::Spring => e.params[0] >= 0.0,
-            EffectKind::GravityTilt if e.params.len() == BASE_TILT_PARAMS => e.params[0] <= self.rules.max_base_tilt_deg.to_radians().sin(),
+            EffectKind::GravityTilt if base_lean(&e).is_some() => e.params[0] <= self.rules.max_base_tilt_deg.to_radians().sin(),
             _ => true,
         }
     }
@@ -3183,7 +3176,7 @@ impl EffortProblem<'_> {
                 "over the swing recorded a spring and a tilted axis (a sine of the angle) pull alike; a wider swing tells them apart",
                 if cand.kind == EffectKind::Spring {
                     format!("a spring of {:.4} N·m/rad towards {:.3} rad", params[0], params[1])
-                } else if params.len() == BASE_TILT_PARAMS {
+                } else if cand.is_base_tilt() {
                     format!("the base tilted {:.2}°, the joint pulled towards {:.3} rad", params[0].min(1.0).asin().to_degrees(), params[1])
                 } else {
                     format!("a tilted axis whose gravity pulls towards {:.3} rad, {:.4} N·m at its peak", params[1], params[0])

@@ -1147,7 +1147,7 @@ fn effect_report(
             put("rest_position", x[1], sd[1]);
             format!("spring {:.4} {force}/{length} towards {:.3} {length}", x[0], x[1])
         }
-        EffectKind::GravityTilt if x.len() == tilt::BASE_TILT_PARAMS => base_tilt_text(x, sd, gravity, &mut put),
+        EffectKind::GravityTilt if tilt::base_lean(e).is_some() => base_tilt_text(x, sd, gravity, &mut put),
         EffectKind::GravityTilt => {
             let lever = terms.subtree_mass_kg * gravity.length() * terms.com_radius_m;
             let ratio = if lever > 0.0 { (x[0] / lever).clamp(-1.0, 1.0) } else { 0.0 };

@@ -24,8 +24,8 @@
 //! on the root link placed by the same turn.
 
 use glam::{DQuat, DVec3};
-use rayon::prelude::*;
 
+use super::accuracy::at_rest_series;
 use super::model::{DofKind, GapModel};
 use crate::dynamics::MultiBody;
 
@@ -53,16 +53,7 @@ pub fn tilt_applies(model: &GapModel, j: usize, gravity_dir: DVec3) -> bool {
 #[must_use]
 pub fn base_joint(model: &GapModel) -> Option<usize> {
     let movable = |k: usize| model.joints[k].kind != DofKind::Fixed;
-    let carried = |j: usize| {
-        let mut link = model.joints[j].parent;
-        while let Some(k) = model.parent_joint[link] {
-            if movable(k) {
-                return true;
-            }
-            link = model.joints[k].parent;
-        }
-        false
-    };
+    let carried = |j: usize| model.moving_joint_of(model.joints[j].parent).is_some();
     let mut roots = (0..model.joints.len()).filter(|&j| movable(j) && !carried(j));
     let (Some(j), None) = (roots.next(), roots.next()) else { return None };
     let chain = (0..model.joints.len()).any(|k| k != j && movable(k));
@@ -95,20 +86,10 @@ pub fn tilt_directions(model: &GapModel, j: usize, gravity_dir: DVec3) -> Option
 /// where the motion is not finite).
 #[must_use]
 pub fn tilt_efforts(tree: &MultiBody, q_of: &[Vec<[f64; 3]>], gravity: DVec3, directions: [DVec3; 2]) -> [Vec<Vec<f64>>; 2] {
-    let nd = q_of.len();
-    let n = q_of.first().map_or(0, Vec::len);
     let g = gravity.length();
-    let per_sample: Vec<Option<[Vec<f64>; 2]>> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            if !q_of.iter().all(|d| d[i].iter().all(|v| v.is_finite())) {
-                return None;
-            }
-            let q: Vec<f64> = q_of.iter().map(|d| d[i][0]).collect();
-            Some(directions.map(|h| tree.inverse_dynamics(&q, &[], &[], g * h)))
-        })
-        .collect();
-    [0, 1].map(|k| (0..nd).map(|d| per_sample.iter().map(|s| s.as_ref().map_or(f64::NAN, |e| e[k][d])).collect()).collect())
+    let mut series =
+        at_rest_series(q_of, 2, |q| directions.iter().map(|&h| tree.inverse_dynamics(q, &[], &[], g * h)).collect()).into_iter();
+    std::array::from_fn(|_| series.next().unwrap_or_default())
 }
 
 /// The turn of the base (world ← base) under which gravity, seen from the base, leans by `w`
