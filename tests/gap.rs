@@ -640,18 +640,21 @@ fn drive_torques(drive: (f64, f64), t: f64) -> [f64; 2] {
 }
 
 /// How a run is logged: its rate, the step its positions are rounded to (an encoder's or a
-/// logger's resolution; None: 9 decimals), and how far each time stamp may lie from the instant
-/// the sample was taken (a logger's clock; seeded, uniform).
+/// logger's resolution; None: 9 decimals), how far each time stamp may lie from the instant
+/// the sample was taken (a logger's clock; seeded, uniform), and a sway the position sensors
+/// read that the links do not make (amplitude rad, frequency Hz: an encoder on the motor side
+/// of a compliant drive).
 #[derive(Clone, Copy)]
 struct Log {
     rate_hz: u32,
     q_step: Option<f64>,
     stamp_jitter_s: f64,
+    sway: (f64, f64),
 }
 
 impl Log {
-    /// 200 Hz, 9 decimals, exact stamps.
-    const AT_200_HZ: Self = Self { rate_hz: 200, q_step: None, stamp_jitter_s: 0.0 };
+    /// 200 Hz, 9 decimals, exact stamps, no sway.
+    const AT_200_HZ: Self = Self { rate_hz: 200, q_step: None, stamp_jitter_s: 0.0, sway: (0.0, 0.0) };
 }
 
 /// The textbook equations of motion of [`DOUBLE_PENDULUM`] carrying `load` (see
@@ -720,12 +723,15 @@ fn logged_double_pendulum_csv(
         String::from(if drive.is_some() { "time,shoulder.q,elbow.q,shoulder.effort,elbow.effort\n" } else { "time,shoulder.q,elbow.q\n" });
     let rate = f64::from(log.rate_hz);
     let samples = (duration_s * rate).round() as usize;
-    let logged = |q: f64| log.q_step.map_or(q, |step| (q / step).round() * step);
+    let logged = |q: f64, t: f64| {
+        let read = q + log.sway.0 * (std::f64::consts::TAU * log.sway.1 * t).sin();
+        log.q_step.map_or(read, |step| (read / step).round() * step)
+    };
     let mut clock = rand_chacha::ChaCha8Rng::seed_from_u64(7);
     for i in 0..=samples {
         let t0 = i as f64 / rate;
         let stamp = t0 + log.stamp_jitter_s * (2.0 * clock.random::<f64>() - 1.0);
-        write!(csv, "{stamp:.6},{:.9},{:.9}", logged(s[0]), logged(s[1])).expect("writes to a string");
+        write!(csv, "{stamp:.6},{:.9},{:.9}", logged(s[0], t0), logged(s[1], t0)).expect("writes to a string");
         if let Some(d) = drive {
             let u = drive_torques(d, t0);
             write!(csv, ",{:.9},{:.9}", u[0], u[1]).expect("writes to a string");
@@ -1151,6 +1157,32 @@ fn a_real_double_pendulums_elbow_friction_is_read_by_the_motion_it_predicts() {
     }
 }
 
+/// Broke: on the real double pendulum's main run, effort space was read in a band that passes the
+/// excitation's third harmonic, which the encoders show and the motors never drive (the model as
+/// written needs four times the recorded effort there), and matched it with a lower link 20 %
+/// lighter than the published one and 56 % of the shoulder's published friction. Read below
+/// that band, dry friction is named on both joints within 30 % of the levels published for
+/// this run, and no part is lighter or heavier than modelled.
+#[test]
+fn a_real_double_pendulums_friction_is_read_below_what_its_encoders_sway() {
+    let Some((model, rec)) = shared_recording("dfki_double_pendulum", "recording.csv") else { return };
+    let reference: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(shared_case_dir("dfki_double_pendulum").join("reference.json")).expect("reference"))
+            .expect("json");
+    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
+    for joint in ["shoulder", "elbow"] {
+        let published = reference["effects"]
+            .as_array()
+            .and_then(|effects| effects.iter().find(|e| e["joint"] == joint && e["kind"] == "coulomb_friction"))
+            .and_then(|e| e["params"]["friction"].as_f64())
+            .expect("the reference names each joint's friction");
+        let dry = report.effects.iter().find(|e| e.joint == joint && e.kind == "coulomb_friction");
+        assert!(dry.is_some_and(|e| (e.params["friction"] / published - 1.0).abs() < 0.3), "{joint} (published {published}): {found:?}");
+    }
+    assert!(!report.effects.iter().any(|e| e.kind == "mass_scale"), "{found:?}");
+}
+
 /// The replay rule must not turn a right reading round: a double pendulum with dry friction at
 /// both joints (the library's multibody code plays no part in making it), released and left to
 /// swing, is read as dry friction at both (levels within 25 %), with no viscous damping.
@@ -1181,7 +1213,7 @@ fn a_fast_log_of_coarse_positions_reads_as_a_slower_one() {
     let model = parse_model(DOUBLE_PENDULUM, Path::new("double_pendulum.urdf")).expect("model parses");
     // Stamps up to 0.3 ms off where they stay in order, 0.2 ms at 2 kHz.
     for (rate_hz, stamp_jitter_s) in [(200, 3e-4), (1000, 3e-4), (2000, 2e-4)] {
-        let log = Log { rate_hz, q_step: Some(1e-3), stamp_jitter_s };
+        let log = Log { rate_hz, q_step: Some(1e-3), stamp_jitter_s, ..Log::AT_200_HZ };
         let csv = logged_double_pendulum_csv(0.3, -0.2, 10.0, [0.1, 0.05], (0.0, 0.0), Some((0.6, 0.3)), log);
         let rec = parse_recording(&csv, Path::new("logged.csv")).expect("parses");
         let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
@@ -1192,6 +1224,32 @@ fn a_fast_log_of_coarse_positions_reads_as_a_slower_one() {
         for (joint, level) in [("shoulder", 0.1), ("elbow", 0.05)] {
             let dry = report.effects.iter().find(|e| e.joint == joint && e.kind == "coulomb_friction");
             assert!(dry.is_some_and(|e| (e.params["friction"] - level).abs() < 0.25 * level), "{rate_hz} Hz, {joint}: {found:?}");
+        }
+    }
+}
+
+/// Broke: the real double pendulum's encoders read its excitation's third harmonic, which its
+/// motors never drive (a sensor on the motor side of a compliant drive sways where the link does
+/// not), and effort space, filtered to pass it, read the rigid bodies' effort for that sway as
+/// a lower link 20 % lighter and 56 % of the shoulder's friction. A band where both the model as
+/// written and the fitted one need more than twice the recorded effort is beyond the rigid
+/// bodies, and a narrower one is read. A driven double pendulum with dry friction whose position
+/// sensors sway by 10 mrad at 3 Hz (three times its motion's frequency; its efforts do not: read
+/// in the band that passes it, `unknown` on both joints) reads as without the sway: dry friction
+/// at both joints (levels within 25 %), nothing else.
+#[test]
+fn a_sway_the_position_sensors_read_and_the_efforts_do_not_is_not_read_as_physics() {
+    let model = parse_model(DOUBLE_PENDULUM, Path::new("double_pendulum.urdf")).expect("model parses");
+    for sway in [(0.0, 0.0), (1e-2, 3.0)] {
+        let log = Log { sway, ..Log::AT_200_HZ };
+        let csv = logged_double_pendulum_csv(0.3, -0.2, 10.0, [0.1, 0.05], (0.0, 0.0), Some((0.6, 0.3)), log);
+        let rec = parse_recording(&csv, Path::new("swaying.csv")).expect("parses");
+        let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+        let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
+        assert_eq!(report.effects.len(), 2, "sway {sway:?}: {found:?}");
+        for (joint, level) in [("shoulder", 0.1), ("elbow", 0.05)] {
+            let dry = report.effects.iter().find(|e| e.joint == joint && e.kind == "coulomb_friction");
+            assert!(dry.is_some_and(|e| (e.params["friction"] - level).abs() < 0.25 * level), "sway {sway:?}, {joint}: {found:?}");
         }
     }
 }

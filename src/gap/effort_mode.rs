@@ -14,6 +14,7 @@ use super::effort::{Bandwidth, EffortProblem, HELD_OUT_HORIZON_S, JointFinding, 
 use super::effort::{in_serial_chain, moving_part};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
+use super::smooth::Smoother;
 use super::stops::{FoundStop, StopRules, find_stops};
 use super::tilt::{base_lean, world_from_base};
 use super::{GapConfig, GapError, GapModel, Given, JointOutcome, Recording, effect_report, rmse_pair};
@@ -30,7 +31,7 @@ const MIN_FREE_SHARE: f64 = 0.2;
 
 /// Half-gain frequencies of the parallel filter tried, as multiples of the motion's dominant
 /// frequency, widest first ([`analyze_effort_space`]).
-pub(super) const EQUATION_BANDS: [f64; 2] = [5.0, 2.5];
+pub(super) const EQUATION_BANDS: [f64; 3] = [5.0, 2.5, 1.5];
 
 /// Per identified joint: samples in contact with a modelled stop, from the measured positions
 /// (within [`CONTACT_SHARE`] of the travel or four noise σ of the limit, and a turning point
@@ -260,6 +261,54 @@ impl Identified<'_> {
             .fold(0.0, f64::max)
     }
 }
+
+/// Whether the rigid bodies stop making the recorded motion between this band and a narrower one
+/// (its filter σ `narrower_sigma_s`): on some chain joint with a recorded effort, the model as
+/// written and the fitted model both need there at least [`BEYOND_THE_BODIES`] × the effort the
+/// recording holds there. Then no alignment of the two explains the recording there (‖m‖ ≥ 2‖e‖
+/// ⇒ ‖e − m‖ ≥ ‖e‖: worse than no model), and no term that any fit adds does either: the
+/// positions move where the efforts do not, as a sensor read through a compliant drive sways
+/// or a controller chatters. The real double pendulum's encoders show its excitation's third
+/// harmonic, which its motors never drive (the model as written needs 4× the recorded effort
+/// there, the fitted 2.4×); the fit in that band took a lighter lower link and 56 % of the
+/// shoulder's friction to match it. A model's weight error scales what it needs at every
+/// frequency, and the fitted model takes it out; friction that turns round ahead of the
+/// speed (`MuJoCo`'s regularised friction loss) leaves the fitted model needing more than the
+/// recording (1.8× on a Panda's wrist), the model as written not. What the bodies need there
+/// must also be material, `min_share` of the joint's own effort (a smooth drive leaves a band
+/// above its motion all but empty, where the ratio of two nothings says nothing).
+fn beyond_the_bodies(found: &Identified, model: &GapModel, rec: &Recording, narrower_sigma_s: f64, min_share: f64) -> bool {
+    let sig = &found.sig;
+    // Gaussians compose: the narrower filter is this one followed by one of σ² = σn² − σ².
+    let extra_s = (narrower_sigma_s.powi(2) - sig.band.sigma_s.powi(2)).max(0.0).sqrt();
+    let dofs = model.dofs();
+    found.findings.iter().any(|f| {
+        let name = &model.joints[f.joint].name;
+        let Some(e) = dofs.iter().position(|&x| x == f.joint).and_then(|d| sig.effort[d].as_ref()) else { return false };
+        if !in_serial_chain(model, f.joint) || !rec.joint_effort.contains_key(name) {
+            return false;
+        }
+        let n = e.len();
+        let (written, fitted) = (&f.residual_before, &f.residual_after);
+        let valid: Vec<bool> = (0..n).map(|i| e[i].is_finite() && written[i].is_finite() && fitted[i].is_finite()).collect();
+        let narrower = Smoother::new(&sig.time_s, &valid, &sig.time_s, extra_s);
+        let used: Vec<usize> = (0..n).filter(|&i| valid[i]).collect();
+        let above = |y: &[f64]| {
+            let low = narrower.apply(y);
+            let (sum, count) =
+                used.iter().filter(|&&i| low[i].is_finite()).fold((0.0, 0usize), |(s, c), &i| (s + (y[i] - low[i]).powi(2), c + 1));
+            (sum / count.max(1) as f64).sqrt()
+        };
+        let need = |residual: &[f64]| above(&(0..n).map(|i| e[i] - residual[i]).collect::<Vec<f64>>());
+        let (recorded, needed) = (above(e), need(written).min(need(fitted)));
+        needed >= BEYOND_THE_BODIES * recorded && needed >= min_share * f.effort_rms
+    })
+}
+
+/// What the rigid bodies may need, above a band, over the effort recorded there before the band
+/// is beyond them ([`beyond_the_bodies`]): from ‖e − m‖ ≥ ‖m‖ − ‖e‖, the least ratio at which a
+/// model explains less than nothing however it aligns with the recording.
+const BEYOND_THE_BODIES: f64 = 2.0;
 
 /// Identification with the equation of motion low-passed at `cutoff_over_motion` × the motion's
 /// dominant frequency: on the whole recording and on its part before `t_split`, unmodelled stops
@@ -823,9 +872,10 @@ fn not_shown_line(kind: EffectKind, with_it: f64, without_it: f64) -> String {
 /// explains: above some frequency a real mechanism stops being the rigid-body model (torque
 /// ripple, a controller's chatter, a sensor's own dynamics, compliance), and there the residual
 /// is no missing joint physics. Starting wide keeps what the motion's fast parts tell (a push's
-/// onset, a friction reversal); where the fitted effects still leave a material part of a chain joint's
-/// effort unexplained (`unknown`), the band is narrowed, and the band with the least unexplained
-/// share is kept.
+/// onset, a friction reversal); a band is narrowed where the rigid bodies need, above the next
+/// narrower band, effort the recording does not hold ([`beyond_the_bodies`]), or where the
+/// fitted effects still leave a material part of a chain joint's effort unexplained (`unknown`),
+/// and of the bands not beyond the bodies the one with the least unexplained share is kept.
 pub(super) fn analyze_effort_space(
     model: &GapModel,
     rec: &Recording,
@@ -843,9 +893,24 @@ pub(super) fn analyze_effort_space(
     let efforts: Vec<Option<Vec<f64>>> =
         dofs.iter().map(|&j| Some(rec.joint_effort.get(&model.joints[j].name).cloned().unwrap_or_else(|| vec![0.0; n]))).collect();
     let mut best: Option<Identified> = None;
+    // The last band passed over as beyond the rigid bodies, read where no narrower band reads.
+    let mut beyond: Option<Identified> = None;
+    // Bands that clamp to the same filter (a slow motion reaches the widest filter allowed at
+    // every multiple) are one band, identified once.
+    let mut bands: Vec<(f64, f64)> = Vec::new();
     for &cutoff in &EQUATION_BANDS {
+        let sigma_s = super::effort::bandwidth(&rec.time_s, &positions, rules.smoothing_half_width_s, cutoff).sigma_s;
+        if bands.last().is_none_or(|&(_, last)| sigma_s > last * (1.0 + 1e-9)) {
+            bands.push((cutoff, sigma_s));
+        }
+    }
+    for (k, &(cutoff, _)) in bands.iter().enumerate() {
         let Some(found) = identify_at(model, rec, &positions, &efforts, rows, gravity, t_split, &rules, cutoff) else { continue };
         let share = found.unexplained_share(model);
+        if bands.get(k + 1).is_some_and(|&(_, sigma_n)| beyond_the_bodies(&found, model, rec, sigma_n, rules.min_effort_share)) {
+            beyond = Some(found);
+            continue;
+        }
         if best.as_ref().is_none_or(|b| share < b.unexplained_share(model)) {
             best = Some(found);
         }
@@ -853,7 +918,7 @@ pub(super) fn analyze_effort_space(
             break;
         }
     }
-    let Some(mut found) = best else {
+    let Some(mut found) = best.or(beyond) else {
         return Ok(EffortOutcome::default());
     };
 
