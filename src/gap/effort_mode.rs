@@ -262,11 +262,29 @@ impl Identified<'_> {
     }
 }
 
+/// The bands of [`EQUATION_BANDS`] for these positions, widest first; bands that clamp to the
+/// same filter (a slow motion reaches the widest filter allowed at every multiple) are one band,
+/// identified once.
+fn equation_bands(time_s: &[f64], positions: &[Vec<f64>], rules: &SelectionRules) -> Vec<Bandwidth> {
+    let mut bands: Vec<Bandwidth> = Vec::new();
+    for &cutoff in &EQUATION_BANDS {
+        let band = super::effort::bandwidth(time_s, positions, rules.smoothing_half_width_s, cutoff);
+        // σ grows as the band narrows; one clamped to the last band's σ is that band.
+        if bands.last().is_none_or(|last| band.sigma_s > last.sigma_s * (1.0 + SAME_FILTER_SHARE)) {
+            bands.push(band);
+        }
+    }
+    bands
+}
+
+/// Relative difference of two filters' σ within which they are one filter ([`equation_bands`]).
+const SAME_FILTER_SHARE: f64 = 1e-9;
+
 /// Whether the rigid bodies stop making the recorded motion between this band and a narrower one
 /// (its filter σ `narrower_sigma_s`): on some chain joint with a recorded effort, the model as
 /// written and the fitted model both need there at least [`BEYOND_THE_BODIES`] × the effort the
-/// recording holds there. Then no alignment of the two explains the recording there (‖m‖ ≥ 2‖e‖
-/// ⇒ ‖e − m‖ ≥ ‖e‖: worse than no model), and no term that any fit adds does either: the
+/// recording holds there. Then neither explains the recording there however the two align
+/// (‖m‖ ≥ 2‖e‖ ⇒ ‖e − m‖ ≥ ‖e‖: worse than no model), though the fit chose its terms to: the
 /// positions move where the efforts do not, as a sensor read through a compliant drive sways
 /// or a controller chatters. The real double pendulum's encoders show its excitation's third
 /// harmonic, which its motors never drive (the model as written needs 4× the recorded effort
@@ -301,7 +319,8 @@ fn beyond_the_bodies(found: &Identified, model: &GapModel, rec: &Recording, narr
         };
         let need = |residual: &[f64]| above(&(0..n).map(|i| e[i] - residual[i]).collect::<Vec<f64>>());
         let (recorded, needed) = (above(e), need(written).min(need(fitted)));
-        needed >= BEYOND_THE_BODIES * recorded && needed >= min_share * f.effort_rms
+        // Nothing to compare (no sample in reach of both filters) is no evidence.
+        needed > 0.0 && needed >= BEYOND_THE_BODIES * recorded && needed >= min_share * f.effort_rms
     })
 }
 
@@ -310,8 +329,7 @@ fn beyond_the_bodies(found: &Identified, model: &GapModel, rec: &Recording, narr
 /// model explains less than nothing however it aligns with the recording.
 const BEYOND_THE_BODIES: f64 = 2.0;
 
-/// Identification with the equation of motion low-passed at `cutoff_over_motion` × the motion's
-/// dominant frequency: on the whole recording and on its part before `t_split`, unmodelled stops
+/// Identification with the equation of motion low-passed as `band` says: on the whole recording and on its part before `t_split`, unmodelled stops
 /// found and their contacts left out. None when no joint has enough free motion.
 #[allow(clippy::too_many_arguments)]
 fn identify_at<'a>(
@@ -323,10 +341,9 @@ fn identify_at<'a>(
     gravity: DVec3,
     t_split: f64,
     rules: &SelectionRules,
-    cutoff_over_motion: f64,
+    band: Bandwidth,
 ) -> Option<Identified<'a>> {
     let n = rec.time_s.len();
-    let band = super::effort::bandwidth(&rec.time_s, positions, rules.smoothing_half_width_s, cutoff_over_motion);
     // The contact exclusions cover the whole support of the filters.
     let support_s = band.support_s();
     let sig = signals(&rec.time_s, positions, efforts, &band);
@@ -866,16 +883,51 @@ fn not_shown_line(kind: EffectKind, with_it: f64, without_it: f64) -> String {
     )
 }
 
-/// Effort-space analysis of `rows` (model joint indices); one outcome per row.
-///
 /// The equation of motion is identified in the widest of [`EQUATION_BANDS`] that the model
 /// explains: above some frequency a real mechanism stops being the rigid-body model (torque
 /// ripple, a controller's chatter, a sensor's own dynamics, compliance), and there the residual
 /// is no missing joint physics. Starting wide keeps what the motion's fast parts tell (a push's
-/// onset, a friction reversal); a band is narrowed where the rigid bodies need, above the next
-/// narrower band, effort the recording does not hold ([`beyond_the_bodies`]), or where the
-/// fitted effects still leave a material part of a chain joint's effort unexplained (`unknown`),
-/// and of the bands not beyond the bodies the one with the least unexplained share is kept.
+/// onset, a friction reversal). The first band whose fitted effects leave no material part of a
+/// chain joint's effort unexplained (`unknown`) is kept, else the one that leaves the least; a
+/// band whose stretch above the next narrower one is beyond the rigid bodies
+/// ([`beyond_the_bodies`]) is not kept, nor is any wider one (it passes that stretch too), and
+/// is read only where no narrower band can be.
+#[allow(clippy::too_many_arguments)]
+fn identify_in_bands<'a>(
+    model: &'a GapModel,
+    rec: &Recording,
+    positions: &[Vec<f64>],
+    efforts: &[Option<Vec<f64>>],
+    rows: &[usize],
+    gravity: DVec3,
+    t_split: f64,
+    rules: &SelectionRules,
+) -> Option<Identified<'a>> {
+    let mut best: Option<Identified> = None;
+    // The last band passed over as beyond the rigid bodies, read where no narrower band reads.
+    let mut beyond: Option<Identified> = None;
+    let bands = equation_bands(&rec.time_s, positions, rules);
+    for (k, band) in bands.iter().enumerate() {
+        let Some(found) = identify_at(model, rec, positions, efforts, rows, gravity, t_split, rules, *band) else { continue };
+        let share = found.unexplained_share(model);
+        if bands.get(k + 1).is_some_and(|narrower| beyond_the_bodies(&found, model, rec, narrower.sigma_s, rules.min_effort_share)) {
+            // A wider band kept so far passes that stretch too, at a higher gain.
+            best = None;
+            beyond = Some(found);
+            continue;
+        }
+        if best.as_ref().is_none_or(|b| share < b.unexplained_share(model)) {
+            best = Some(found);
+        }
+        if share <= rules.unknown_share {
+            break;
+        }
+    }
+    best.or(beyond)
+}
+
+/// Effort-space analysis of `rows` (model joint indices); one outcome per row, read in the band
+/// [`identify_in_bands`] chooses.
 pub(super) fn analyze_effort_space(
     model: &GapModel,
     rec: &Recording,
@@ -892,33 +944,7 @@ pub(super) fn analyze_effort_space(
     // No effort column: zero applied effort (spec §2).
     let efforts: Vec<Option<Vec<f64>>> =
         dofs.iter().map(|&j| Some(rec.joint_effort.get(&model.joints[j].name).cloned().unwrap_or_else(|| vec![0.0; n]))).collect();
-    let mut best: Option<Identified> = None;
-    // The last band passed over as beyond the rigid bodies, read where no narrower band reads.
-    let mut beyond: Option<Identified> = None;
-    // Bands that clamp to the same filter (a slow motion reaches the widest filter allowed at
-    // every multiple) are one band, identified once.
-    let mut bands: Vec<(f64, f64)> = Vec::new();
-    for &cutoff in &EQUATION_BANDS {
-        let sigma_s = super::effort::bandwidth(&rec.time_s, &positions, rules.smoothing_half_width_s, cutoff).sigma_s;
-        if bands.last().is_none_or(|&(_, last)| sigma_s > last * (1.0 + 1e-9)) {
-            bands.push((cutoff, sigma_s));
-        }
-    }
-    for (k, &(cutoff, _)) in bands.iter().enumerate() {
-        let Some(found) = identify_at(model, rec, &positions, &efforts, rows, gravity, t_split, &rules, cutoff) else { continue };
-        let share = found.unexplained_share(model);
-        if bands.get(k + 1).is_some_and(|&(_, sigma_n)| beyond_the_bodies(&found, model, rec, sigma_n, rules.min_effort_share)) {
-            beyond = Some(found);
-            continue;
-        }
-        if best.as_ref().is_none_or(|b| share < b.unexplained_share(model)) {
-            best = Some(found);
-        }
-        if share <= rules.unknown_share {
-            break;
-        }
-    }
-    let Some(mut found) = best.or(beyond) else {
+    let Some(mut found) = identify_in_bands(model, rec, &positions, &efforts, rows, gravity, t_split, &rules) else {
         return Ok(EffortOutcome::default());
     };
 
@@ -1287,6 +1313,20 @@ fn effort_mismatch(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Broke: a slow motion clamps every multiple of its frequency to the widest filter allowed,
+    /// and the real Panda was identified twice over that one band. A motion at 0.05 Hz gets one
+    /// band; one at 1.5 Hz three, narrowing.
+    #[test]
+    fn bands_that_clamp_to_one_filter_are_one_band() {
+        let time_s: Vec<f64> = (0..4000).map(|i| f64::from(i) / 200.0).collect();
+        let swing = |f_hz: f64| vec![time_s.iter().map(|t| 0.5 * (std::f64::consts::TAU * f_hz * t).sin()).collect::<Vec<f64>>()];
+        let rules = SelectionRules::default();
+        assert_eq!(equation_bands(&time_s, &swing(0.05), &rules).len(), 1);
+        let sigmas_s: Vec<f64> = equation_bands(&time_s, &swing(1.5), &rules).iter().map(|b| b.sigma_s).collect();
+        assert_eq!(sigmas_s.len(), EQUATION_BANDS.len(), "{sigmas_s:?}");
+        assert!(sigmas_s.windows(2).all(|w| w[1] > w[0]), "{sigmas_s:?}");
+    }
 
     /// [`chain_horizon_s`] of a two-link arm (1 kg at the middle of each 1 m link, 0.5 kg·m²
     /// about its centre) resting at `q` for 4 s at 200 Hz, the motion's period taken as 2 s.
