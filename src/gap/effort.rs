@@ -3012,25 +3012,19 @@ impl EffortProblem<'_> {
         (rest.len() < terms.0.len()).then_some(Terms(rest))
     }
 
-    /// `terms` (a reading of this problem) with row r read as `other_terms` read it in
-    /// `other` (the same model and rows on other samples: the training part's problem and the
-    /// whole recording's); None when the two problems' candidates differ. How the training part
-    /// is given the whole recording's reading of one joint, to replay it ([`super::effort_mode`]).
+    /// `other_terms`, a reading of `other` (the same model and rows on other samples: the
+    /// whole recording's problem and the training part's), as a reading of this problem; None
+    /// when the two problems' candidates differ. How the training part is given the whole
+    /// recording's reading, to replay it ([`super::effort_mode`]).
     #[must_use]
-    pub fn with_row_read_as(&self, terms: &Terms, r: usize, other: &EffortProblem<'_>, other_terms: &Terms) -> Option<Terms> {
+    pub fn read_as(&self, other: &EffortProblem<'_>, other_terms: &Terms) -> Option<Terms> {
         let same = self.candidates.len() == other.candidates.len()
             && self
                 .candidates
                 .iter()
                 .zip(&other.candidates)
                 .all(|(a, b)| a.row == b.row && a.kind == b.kind && a.asymmetric == b.asymmetric);
-        if !same {
-            return None;
-        }
-        let mut set: Vec<usize> = terms.0.iter().copied().filter(|&c| self.candidates[c].row != r).collect();
-        set.extend(other_terms.0.iter().copied().filter(|&c| other.candidates[c].row == r));
-        set.sort_unstable();
-        Some(Terms(set))
+        same.then(|| other_terms.clone())
     }
 
     /// `terms` with row r's friction read the other way, when it holds exactly one of dry
