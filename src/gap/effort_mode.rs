@@ -293,9 +293,11 @@ const SAME_FILTER_SHARE: f64 = 1e-9;
 /// frequency, and the fitted model takes it out; friction that turns round ahead of the
 /// speed (`MuJoCo`'s regularised friction loss) leaves the fitted model needing more than the
 /// recording (1.8× on a Panda's wrist), the model as written not. What the bodies need there
-/// must also be material, `min_share` of the joint's own effort (a smooth drive leaves a band
-/// above its motion all but empty, where the ratio of two nothings says nothing).
-fn beyond_the_bodies(found: &Identified, model: &GapModel, rec: &Recording, narrower_sigma_s: f64, min_share: f64) -> bool {
+/// must also be material, [`SelectionRules::min_effort_share`] of the joint's own effort (a
+/// smooth drive leaves a band above its motion all but empty, where the ratio of two nothings
+/// says nothing).
+fn beyond_the_bodies(found: &Identified, input: &BandInput, narrower_sigma_s: f64) -> bool {
+    let (model, rec) = (input.model, input.rec);
     let sig = &found.sig;
     // Gaussians compose: the narrower filter is this one followed by one of σ² = σn² − σ².
     let extra_s = (narrower_sigma_s.powi(2) - sig.band.sigma_s.powi(2)).max(0.0).sqrt();
@@ -320,7 +322,7 @@ fn beyond_the_bodies(found: &Identified, model: &GapModel, rec: &Recording, narr
         let need = |residual: &[f64]| above(&(0..n).map(|i| e[i] - residual[i]).collect::<Vec<f64>>());
         let (recorded, needed) = (above(e), need(written).min(need(fitted)));
         // Nothing to compare (no sample in reach of both filters) is no evidence.
-        needed > 0.0 && needed >= BEYOND_THE_BODIES * recorded && needed >= min_share * f.effort_rms
+        needed > 0.0 && needed >= BEYOND_THE_BODIES * recorded && needed >= input.rules.min_effort_share * f.effort_rms
     })
 }
 
@@ -329,20 +331,25 @@ fn beyond_the_bodies(found: &Identified, model: &GapModel, rec: &Recording, narr
 /// model explains less than nothing however it aligns with the recording.
 const BEYOND_THE_BODIES: f64 = 2.0;
 
-/// Identification with the equation of motion low-passed as `band` says: on the whole recording and on its part before `t_split`, unmodelled stops
-/// found and their contacts left out. None when no joint has enough free motion.
-#[allow(clippy::too_many_arguments)]
-fn identify_at<'a>(
+/// What every band's identification reads: the model, the recording, its positions and applied
+/// efforts per dof (NaN where a position is not observed; zero where no effort is recorded), the
+/// identified rows (model joint indices), gravity, the start of the held-out part and the rules.
+struct BandInput<'a> {
     model: &'a GapModel,
-    rec: &Recording,
-    positions: &[Vec<f64>],
-    efforts: &[Option<Vec<f64>>],
-    rows: &[usize],
+    rec: &'a Recording,
+    positions: &'a [Vec<f64>],
+    efforts: &'a [Option<Vec<f64>>],
+    rows: &'a [usize],
     gravity: DVec3,
     t_split: f64,
-    rules: &SelectionRules,
-    band: Bandwidth,
-) -> Option<Identified<'a>> {
+    rules: &'a SelectionRules,
+}
+
+/// Identification with the equation of motion low-passed as `band` says: on the whole recording
+/// and on its part before `t_split`, unmodelled stops found and their contacts left out. None
+/// when no joint has enough free motion.
+fn identify_at<'a>(input: &BandInput<'a>, band: Bandwidth) -> Option<Identified<'a>> {
+    let BandInput { model, rec, positions, efforts, rows, gravity, t_split, rules } = *input;
     let n = rec.time_s.len();
     // The contact exclusions cover the whole support of the filters.
     let support_s = band.support_s();
@@ -898,34 +905,24 @@ fn not_shown_line(kind: EffectKind, with_it: f64, without_it: f64) -> String {
 /// band whose stretch above the next narrower one is beyond the rigid bodies
 /// ([`beyond_the_bodies`]) is not kept, nor is any wider one (it passes that stretch too), and
 /// is read only where no narrower band can be.
-#[allow(clippy::too_many_arguments)]
-fn identify_in_bands<'a>(
-    model: &'a GapModel,
-    rec: &Recording,
-    positions: &[Vec<f64>],
-    efforts: &[Option<Vec<f64>>],
-    rows: &[usize],
-    gravity: DVec3,
-    t_split: f64,
-    rules: &SelectionRules,
-) -> Option<Identified<'a>> {
+fn identify_in_bands<'a>(input: &BandInput<'a>) -> Option<Identified<'a>> {
     let mut best: Option<Identified> = None;
     // The last band passed over as beyond the rigid bodies, read where no narrower band reads.
     let mut beyond: Option<Identified> = None;
-    let bands = equation_bands(&rec.time_s, positions, rules);
+    let bands = equation_bands(&input.rec.time_s, input.positions, input.rules);
     for (k, band) in bands.iter().enumerate() {
-        let Some(found) = identify_at(model, rec, positions, efforts, rows, gravity, t_split, rules, *band) else { continue };
-        let share = found.unexplained_share(model);
-        if bands.get(k + 1).is_some_and(|narrower| beyond_the_bodies(&found, model, rec, narrower.sigma_s, rules.min_effort_share)) {
+        let Some(found) = identify_at(input, *band) else { continue };
+        let share = found.unexplained_share(input.model);
+        if bands.get(k + 1).is_some_and(|narrower| beyond_the_bodies(&found, input, narrower.sigma_s)) {
             // A wider band kept so far passes that stretch too, at a higher gain.
             best = None;
             beyond = Some(found);
             continue;
         }
-        if best.as_ref().is_none_or(|b| share < b.unexplained_share(model)) {
+        if best.as_ref().is_none_or(|b| share < b.unexplained_share(input.model)) {
             best = Some(found);
         }
-        if share <= rules.unknown_share {
+        if share <= input.rules.unknown_share {
             break;
         }
     }
@@ -950,7 +947,8 @@ pub(super) fn analyze_effort_space(
     // No effort column: zero applied effort (spec §2).
     let efforts: Vec<Option<Vec<f64>>> =
         dofs.iter().map(|&j| Some(rec.joint_effort.get(&model.joints[j].name).cloned().unwrap_or_else(|| vec![0.0; n]))).collect();
-    let Some(mut found) = identify_in_bands(model, rec, &positions, &efforts, rows, gravity, t_split, &rules) else {
+    let input = BandInput { model, rec, positions: &positions, efforts: &efforts, rows, gravity, t_split, rules: &rules };
+    let Some(mut found) = identify_in_bands(&input) else {
         return Ok(EffortOutcome::default());
     };
 
