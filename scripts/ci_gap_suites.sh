@@ -57,4 +57,11 @@ scripts/parallel.sh \
   "$py scripts/gap_suite_jaxsim.py --out $suite_dir/jaxsim --seed 0" \
   "$py scripts/gap_suite_jaxsim.py --out $suite_dir/seed1/jaxsim --seed 1" \
   "$py scripts/gap_suite_jaxsim.py --out $suite_dir/seed3/jaxsim --seed 3"
+# The Robotics Toolbox's PUMA 560 (its published motors and friction; a tenth engine): last, as
+# its packages (matplotlib, scipy, Pinocchio) are the ones most likely to move a version the
+# others were made with.
+"${suite_pip[@]}" --only-binary=:all: -r scripts/gap_suite_rtb_requirements.txt
+scripts/parallel.sh \
+  "$py scripts/gap_suite_rtb.py --out $suite_dir/rtb --seed 0" \
+  "$py scripts/gap_suite_rtb.py --out $suite_dir/seed1/rtb --seed 1"
 echo "CI: gap suite recordings made in $SECONDS s"
