@@ -54,6 +54,7 @@ class RtbCase:
     name: str
     description: str
     motors: bool  # the toolbox's motors: rotor inertia and friction (all as shipped)
+    model_error: float = 0.0  # model.urdf's masses and inertia tensors scaled by up to this share, link by link
     engine: str = "rtb"
     duration: float = DURATION_S
     rate: int = RATE_HZ
@@ -64,6 +65,8 @@ def cases():
         RtbCase("rtb_puma560_none", "PUMA 560, its motors' inertia and friction off: nothing missing", motors=False),
         RtbCase("rtb_puma560_published", "PUMA 560 as the toolbox ships it: every joint's rotor inertia, viscous and "
                 "direction-dependent Coulomb friction, none in model.urdf", motors=True),
+        RtbCase("rtb_puma560_identified_model", "PUMA 560 as the toolbox ships it, against a model.urdf whose masses "
+                "and inertias are up to 5 % off (an identified model's error)", motors=True, model_error=0.05),
     ]
 
 
@@ -76,6 +79,7 @@ def puma(motors):
         robot = robot.nofriction(coulomb=True, viscous=True)
         for link in robot.links:
             link.Jm = 0.0
+    robot.dynchanged()
     return robot
 
 
@@ -198,6 +202,15 @@ def run_case(case, seed, out):
     rigid = puma(False)
     text = urdf_text(rigid)
     check_urdf(text, rigid, rng)
+    if case.model_error > 0:
+        # What the controller and model.urdf know: every link's mass and inertia tensor scaled alike (its centre of
+        # mass kept), as gap_suite_bullet_arms.identified draws it.
+        for link in rigid.links:
+            factor = 1.0 + rng.uniform(-case.model_error, case.model_error)
+            link.m, link.I = link.m * factor, np.asarray(link.I, float) * factor
+        rigid.dynchanged()  # the toolbox's compiled rne keeps the parameters it was first given otherwise
+        text = urdf_text(rigid)
+        check_urdf(text, rigid, rng)
     nominal = RtbArm(rigid)
     plant = RtbArm(engine)
     armature = np.array([link.G ** 2 * link.Jm for link in engine.links])
@@ -213,7 +226,8 @@ def run_case(case, seed, out):
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
-        f.write("<!-- roboticstoolbox-python models.DH.Puma560: rigid bodies only (no motors, no friction) -->\n" + text)
+        note = "; masses and inertias drawn up to 5 % off (an identified model)" if case.model_error > 0 else ""
+        f.write(f"<!-- roboticstoolbox-python models.DH.Puma560: rigid bodies only (no motors, no friction){note} -->\n" + text)
     gs.write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf", "gravity": "0 0 -9.81"})
     model_effort = gs.inverse_dynamics(nominal, traj, np.gradient(traj.qd, traj.t, axis=0))
     effects = joint_effects(engine) if case.motors else []
