@@ -1157,7 +1157,8 @@ def effort_share(case, traj, engine_mech, nominal):
 def effect_shares(effects, names, traj, model, rigid=None):
     """{"<joint>.<kind>": RMS of the effect's effort along the engine's motion over the RMS of the
     effort that model.urdf needs for that motion (inverse dynamics `model`, per joint)}. Coulomb
-    friction counts only where |qd| > 1e-3; end stops are not counted."""
+    friction counts only where |qd| > 1e-3, at its backward level (friction_reverse) where qd < 0;
+    end stops are not counted."""
     qdd = np.gradient(traj.qd, traj.t, axis=0)
     out = {}
     for e in effects:
@@ -1165,7 +1166,8 @@ def effect_shares(effects, names, traj, model, rigid=None):
         q, v = traj.q[:, n], traj.qd[:, n]
         force = {
             "viscous_damping": lambda: p["damping"] * v,
-            "coulomb_friction": lambda: p["friction"] * np.sign(v) * (np.abs(v) > 1e-3),
+            "coulomb_friction": lambda: np.where(v < 0, p.get("friction_reverse", p["friction"]), p["friction"])
+            * np.sign(v) * (np.abs(v) > 1e-3),
             "spring": lambda: p["stiffness"] * (q - p["rest_position"]),
             "armature": lambda: p["armature"] * qdd[:, n],
             "mass_scale": lambda: rigid[:, n],

@@ -361,7 +361,8 @@ fn add_level(truth: &mut GapTruth, joint: String, kind: &str, param: &str, value
 }
 
 /// The truth with each exact (non-smooth) dry-friction law that differs by direction
-/// (`coulomb_friction` with `friction_reverse` and no `transition_speed`) also readable as the
+/// (`coulomb_friction` with a `friction_reverse` other than its `friction` and no
+/// `transition_speed`; the report's law may be smooth, as fitted laws are) also readable as the
 /// same friction both ways beside a constant offset, where the report reads its joint so: levels
 /// f forward and r backward are, while the joint moves, exactly the level (f + r)/2 both ways and
 /// the offset (r − f)/2 added to the recorded effort (the spec's laws: −f or +r, against
@@ -380,8 +381,14 @@ pub fn direction_dependent_frictions_read_with_an_offset(truth: &GapTruth, repor
     let mut offsets: Vec<(String, f64)> = Vec::new();
     for e in &mut kept.effects {
         let (Some(&f), Some(&r)) = (e.params.get("friction"), e.params.get("friction_reverse")) else { continue };
+        // The truth's law: a smooth one differs from the offset reading at every reversal, and
+        // one the same both ways has no offset to stand for.
         let smooth = e.params.get("transition_speed").is_some_and(|&v| v > 0.0);
-        if e.kind != "coulomb_friction" || smooth || !names(&e.joint, "coulomb_friction", true) || !names(&e.joint, "effort_offset", false)
+        if e.kind != "coulomb_friction"
+            || smooth
+            || (r - f).abs() <= f64::EPSILON * r.abs().max(f.abs())
+            || !names(&e.joint, "coulomb_friction", true)
+            || !names(&e.joint, "effort_offset", false)
         {
             continue;
         }
@@ -1346,6 +1353,8 @@ mod tests {
             {"joint": "j", "kind": "coulomb_friction", "params": {"friction": 1.0, "friction_reverse": 3.0}}]}"#;
         const SMOOTH: &str = r#"{"format": "partscene-gap-truth/1", "joints": ["j"], "effects": [
             {"joint": "j", "kind": "coulomb_friction", "params": {"friction": 1.0, "friction_reverse": 3.0, "transition_speed": 0.1}}]}"#;
+        const SAME_BOTH_WAYS: &str = r#"{"format": "partscene-gap-truth/1", "joints": ["j"], "effects": [
+            {"joint": "j", "kind": "coulomb_friction", "params": {"friction": 2.0, "friction_reverse": 2.0}}]}"#;
         let both_ways: &[(&str, f64, f64)] = &[("friction", 2.0, 0.1)];
         let by_direction: &[(&str, f64, f64)] = &[("friction", 1.0, 0.1), ("friction_reverse", 3.0, 0.1)];
         let offset: &[(&str, f64, f64)] = &[("offset", 1.0, 0.1)];
@@ -1362,6 +1371,13 @@ mod tests {
             &[("coulomb_friction", both_ways), ("effort_offset", offset)],
             &["j:effort_offset offset=0.500", "j:coulomb_friction friction=2.000"],
             1,
+        );
+        // The same level both ways: an offset named beside it stands for nothing in the truth.
+        check_direction(
+            SAME_BOTH_WAYS,
+            &[("coulomb_friction", both_ways), ("effort_offset", offset)],
+            &["j:coulomb_friction friction=2.000,friction_reverse=2.000"],
+            0,
         );
         // Read by direction, or without an offset: the truth stands.
         check_direction(EXACT, &[("coulomb_friction", by_direction)], &["j:coulomb_friction friction=1.000,friction_reverse=3.000"], 0);
