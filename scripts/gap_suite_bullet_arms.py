@@ -219,13 +219,20 @@ def drive(plant, nominal, case, rng, offsets=None):
     q0, source = gs.arm_excitation(nominal, np.zeros(7), ROBOTS[case.robot].home, plant.lo, plant.hi, rng)
     traj = gs.simulate(plant, gs.sample_steps(case.duration, case.rate, False, rng), q0, source)
     plant.close()
+    table, effort_sigma = noisy_table(traj, joints, rng, offsets)
+    return traj, table, effort_sigma
+
+
+def noisy_table(traj, joints, rng, offsets=None):
+    """The arm recording's table of `traj` (joints in order): 1e-4 rad of noise on positions and 1 % of each joint's
+    RMS effort on efforts, plus each joint's `offsets` (a torque sensor's bias); and that effort noise per joint."""
     bias = np.zeros(len(joints)) if offsets is None else np.asarray(offsets, float)
     table = {"time": traj.t}
     table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(joints)})
     effort_sigma = {n: 0.01 * gs.rms(traj.effort[:, i]) for i, n in enumerate(joints)}
     table.update({f"{n}.effort": traj.effort[:, i] + bias[i] + rng.normal(0.0, effort_sigma[n], len(traj.t))
                   for i, n in enumerate(joints)})
-    return traj, table, effort_sigma
+    return table, effort_sigma
 
 
 def base_tilt_effect(plant, case):

@@ -42,6 +42,7 @@ import numpy as np
 import roboticstoolbox as rtb
 
 import gap_suite as gs
+import gap_suite_bullet_arms as bullet
 from gap_suite import DT
 
 DURATION_S, RATE_HZ = 20.0, 200
@@ -226,11 +227,7 @@ def run_case(case, seed, out):
     if case.motors:
         source = friction_feedforward(engine, source)
     traj = gs.simulate(plant, gs.sample_steps(case.duration, case.rate, False, rng), q0, source)
-    table = {"time": traj.t}
-    table.update({f"{n}.q": traj.q[:, i] + rng.normal(0.0, 1e-4, len(traj.t)) for i, n in enumerate(JOINTS)})
-    effort_sigma = {n: 0.01 * gs.rms(traj.effort[:, i]) for i, n in enumerate(JOINTS)}
-    table.update({f"{n}.effort": traj.effort[:, i] + rng.normal(0.0, effort_sigma[n], len(traj.t))
-                  for i, n in enumerate(JOINTS)})
+    table, effort_sigma = bullet.noisy_table(traj, JOINTS, rng)
     folder = os.path.join(out, case.name)
     os.makedirs(folder, exist_ok=True)
     with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:

@@ -6,11 +6,12 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::OnceLock;
 
 use rand::{Rng, SeedableRng};
 
 use partscene::gap::generate::{GenerateConfig, TrueEffect, generate_recording};
-use partscene::gap::{GapConfig, GapError, GapModel, analyze, parse_model, parse_recording, write_outputs};
+use partscene::gap::{GapConfig, GapError, GapModel, GapReport, analyze, parse_model, parse_recording, write_outputs};
 
 const CABINET: &str = r#"<robot name="cabinet">
   <link name="body"><inertial><mass value="20"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
@@ -945,6 +946,18 @@ fn shared_reference(case: &str) -> serde_json::Value {
     serde_json::from_str(&text).expect("reference.json parses")
 }
 
+/// The real double pendulum's main run (`recording.csv`) analysed with the default config, once
+/// for every test that reads it (None where the shared data are absent).
+fn dfki_double_pendulum_main_run() -> Option<&'static GapReport> {
+    static REPORT: OnceLock<Option<GapReport>> = OnceLock::new();
+    REPORT
+        .get_or_init(|| {
+            let (model, rec) = shared_recording("dfki_double_pendulum", "recording.csv")?;
+            Some(analyze(&model, &rec, &GapConfig::default()).expect("analyses"))
+        })
+        .as_ref()
+}
+
 fn shared_recording(case: &str, file: &str) -> Option<(GapModel, partscene::gap::Recording)> {
     let dir = shared_case_dir(case);
     if !dir.is_dir() {
@@ -979,8 +992,7 @@ fn a_real_double_pendulum_gets_no_speed_shaped_bump_for_friction() {
 /// must keep the elbow's, and the fitted chain must still replay its held-out part closely.
 #[test]
 fn a_real_double_pendulums_rotor_inertia_survives_the_replay_check() {
-    let Some((model, rec)) = shared_recording("dfki_double_pendulum", "recording.csv") else { return };
-    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    let Some(report) = dfki_double_pendulum_main_run() else { return };
     let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
     assert!(report.effects.iter().any(|e| e.joint == "elbow" && e.kind == "armature"), "{found:?}");
     for joint in ["shoulder", "elbow"] {
@@ -1153,8 +1165,7 @@ fn a_slider_pulled_slowly_gets_its_break_away() {
 /// and the held-out replay of each joint is within 0.016 rad.
 #[test]
 fn a_real_double_pendulums_elbow_friction_is_read_by_the_motion_it_predicts() {
-    let Some((model, rec)) = shared_recording("dfki_double_pendulum", "recording.csv") else { return };
-    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+    let Some(report) = dfki_double_pendulum_main_run() else { return };
     let elbow: Vec<&str> = report.effects.iter().filter(|e| e.joint == "elbow").map(|e| e.kind.as_str()).collect();
     assert!(elbow.contains(&"coulomb_friction") && !elbow.contains(&"viscous_damping"), "{elbow:?}");
     for joint in ["shoulder", "elbow"] {
@@ -1171,9 +1182,8 @@ fn a_real_double_pendulums_elbow_friction_is_read_by_the_motion_it_predicts() {
 /// this run, and no part is lighter or heavier than modelled.
 #[test]
 fn a_real_double_pendulums_friction_is_read_below_what_its_encoders_sway() {
-    let Some((model, rec)) = shared_recording("dfki_double_pendulum", "recording.csv") else { return };
+    let Some(report) = dfki_double_pendulum_main_run() else { return };
     let reference = shared_reference("dfki_double_pendulum");
-    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
     let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
     for joint in ["shoulder", "elbow"] {
         let published = reference["effects"]
@@ -1197,9 +1207,8 @@ fn a_real_double_pendulums_friction_is_read_below_what_its_encoders_sway() {
 /// open loop within 0.03 rad (the published model, integrated by the data's own check: 0.017).
 #[test]
 fn a_real_double_pendulums_shoulder_rotor_is_tested_beside_the_whole_readings_elbow() {
-    let Some((model, rec)) = shared_recording("dfki_double_pendulum", "recording.csv") else { return };
+    let Some(report) = dfki_double_pendulum_main_run() else { return };
     let reference = shared_reference("dfki_double_pendulum");
-    let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
     let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
     let rotors = &reference["not_expressible"][0]["mass_matrix_terms"];
     for (joint, term) in [("shoulder", "M11"), ("elbow", "M22")] {
