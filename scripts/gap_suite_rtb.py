@@ -30,7 +30,9 @@ worth of it, and the sign law holds it, as the spec's law does.
 Excitation: gap_suite.arm_excitation (computed torque with model.urdf plus the rotor inertia a controller knows from
 the data sheet, around a slow 3-sine target, plus 3 sines per joint), here with the feed-forward of the friction the
 toolbox ships too (a controller of a geared arm compensates its known friction; without it the PUMA's 25 N m of dry
-friction on joint 1 narrows its swing, +-0.20 rad against +-0.28 at seed 0), decided at 200 Hz and held, 20 s. Noise: 1e-4 rad on positions, 1 %
+friction on joint 1 narrows its swing, +-0.20 rad against +-0.28 at seed 0), decided at 200 Hz and held, 20 s; the
+case rtb_puma560_plain_drive leaves the feed-forward out, as a plain drive does: the dry friction then holds the joints
+still at and around their reversals, 14-53 % of the time (a stick-slip arm). Noise: 1e-4 rad on positions, 1 %
 of each joint's RMS effort on efforts.
 """
 import math
@@ -58,6 +60,7 @@ class RtbCase:
     description: str
     motors: bool  # the toolbox's motors: rotor inertia and friction (all as shipped)
     model_error: float = 0.0  # model.urdf's masses and inertia tensors scaled by up to this share, link by link
+    feedforward: bool = True  # the toolbox's friction fed forward by the excitation (with motors only)
     engine: str = "rtb"
     duration: float = DURATION_S
     rate: int = RATE_HZ
@@ -70,6 +73,9 @@ def cases():
                 "direction-dependent Coulomb friction, none in model.urdf", motors=True),
         RtbCase("rtb_puma560_identified_model", "PUMA 560 as the toolbox ships it, against a model.urdf whose masses "
                 "and inertias are up to 5 % off (an identified model's error)", motors=True, model_error=0.05),
+        RtbCase("rtb_puma560_plain_drive", "PUMA 560 as the toolbox ships it, its friction not fed forward: the "
+                "computed-torque drive alone, against which the dry friction holds the joints still for 14-53 % of "
+                "the time", motors=True, feedforward=False),
     ]
 
 
@@ -224,7 +230,7 @@ def run_case(case, seed, out):
     plant = RtbArm(engine)
     armature = np.array([link.G ** 2 * link.Jm for link in engine.links])
     q0, source = gs.arm_excitation(nominal, armature, HOME, plant.lo, plant.hi, rng)
-    if case.motors:
+    if case.motors and case.feedforward:
         source = friction_feedforward(engine, source)
     traj = gs.simulate(plant, gs.sample_steps(case.duration, case.rate, False, rng), q0, source)
     table, effort_sigma = bullet.noisy_table(traj, JOINTS, rng)
@@ -247,8 +253,9 @@ def run_case(case, seed, out):
         "noise": {"q_rad": 1e-4, **{f"{n}.effort": gs.sig3(s) for n, s in effort_sigma.items()}},
         "dropouts": 0.0,
         "excitation": "computed torque with model.urdf plus the rotor inertia (1.5 Hz, damping ratio 0.7) around a "
-                      "slow 3-sine target (0.05-0.3 Hz) + 3 sines per joint (0.5-3 Hz), the toolbox's friction fed "
-                      "forward, decided at 200 Hz and held (gap_suite.arm_excitation)",
+                      "slow 3-sine target (0.05-0.3 Hz) + 3 sines per joint (0.5-3 Hz)"
+                      + (", the toolbox's friction fed forward" if case.motors and case.feedforward else "")
+                      + ", decided at 200 Hz and held (gap_suite.arm_excitation)",
         "visibility_effort_share": gs.effect_shares(effects, JOINTS, traj, model_effort),
     }
     gs.write_json(os.path.join(folder, "truth.json"), truth)

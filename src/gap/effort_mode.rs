@@ -10,10 +10,12 @@ use rayon::prelude::*;
 
 use super::chain::{ChainInput, instability_rate, replay};
 use super::effects::{Effect, EffectKind, JointPhysics};
-use super::effort::{Bandwidth, EffortProblem, HELD_OUT_HORIZON_S, JointFinding, ModelReading, SelectionRules, Signals, Terms, signals};
+use super::effort::{Bandwidth, EffortProblem, Exclusions, HELD_OUT_HORIZON_S, JointFinding, ModelReading, RestsLeftOut, RowInfo};
+use super::effort::{SelectionRules, Signals, Terms, signals};
 use super::effort::{in_serial_chain, moving_part};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
+use super::rests::{held_rests, transition_speed as rest_transition};
 use super::smooth::Smoother;
 use super::stops::{FoundStop, StopRules, find_stops};
 use super::tilt::{base_lean, world_from_base};
@@ -157,12 +159,7 @@ fn first_moments_of(findings: &[JointFinding]) -> Vec<(usize, DVec3)> {
 }
 
 /// Unmodelled stops of every identified joint (same order as `rows_info`).
-fn unmodelled_stops(
-    model: &GapModel,
-    rec: &Recording,
-    positions: &[Vec<f64>],
-    rows_info: &[super::effort::RowInfo],
-) -> Vec<Vec<FoundStop>> {
+fn unmodelled_stops(model: &GapModel, rec: &Recording, positions: &[Vec<f64>], rows_info: &[RowInfo]) -> Vec<Vec<FoundStop>> {
     let rules = StopRules::default();
     rows_info
         .iter()
@@ -356,7 +353,7 @@ fn identify_at<'a>(input: &BandInput<'a>, band: Bandwidth) -> Option<Identified<
     let sig = signals(&rec.time_s, positions, efforts, &band);
     // Joints that spend most of the recording against their stops leave effort space too little
     // free motion to regress on; position space (simulation through the stops) takes them.
-    let (rows, mut excluded): (Vec<usize>, Vec<Vec<bool>>) = rows
+    let (rows, excluded): (Vec<usize>, Vec<Vec<bool>>) = rows
         .iter()
         .copied()
         .zip(contact_masks(model, &rec.time_s, positions, rows, &band))
@@ -369,36 +366,80 @@ fn identify_at<'a>(input: &BandInput<'a>, band: Bandwidth) -> Option<Identified<
     let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
     // The model's efforts are the same for every reading below: computed once.
     let reading = ModelReading::new(model, &sig, gravity, &rows, rules)?;
+    let mut excluded = Exclusions { samples: excluded, rests: Vec::new() };
     let first = EffortProblem::new(model, &sig, &reading, &excluded, &everything, rules.clone())?;
     let stops = unmodelled_stops(model, rec, positions, first.rows());
     for (r, found) in stops.iter().enumerate() {
         for stop in found {
-            widen_into(&mut excluded[r], &stop.contact, &rec.time_s, support_s);
+            widen_into(&mut excluded.samples[r], &stop.contact, &rec.time_s, support_s);
         }
     }
-    // The whole recording's reading and the training part's are independent: in parallel.
-    let ((problem, terms, findings), (train, train_findings)) = rayon::join(
-        || {
-            let problem = if stops.iter().all(Vec::is_empty) {
-                first
-            } else {
-                EffortProblem::new(model, &sig, &reading, &excluded, &everything, rules.clone()).unwrap_or(first)
-            };
-            let terms = problem.chosen_terms();
-            let findings = findings_with_stops(&problem, &terms, &stops);
-            (problem, terms, findings)
-        },
-        || {
-            let train = EffortProblem::new(model, &sig, &reading, &excluded, &train, rules.clone()).map(|p| {
-                let t = p.chosen_terms();
-                (p, t)
-            });
-            let train_findings = train.as_ref().map(|(p, t)| findings_with_stops(p, t, &stops));
-            (train, train_findings)
-        },
-    );
+    // The whole recording's reading and the training part's are independent: in parallel. The
+    // whole one reuses `first` where no stop was left out.
+    let read = |excluded: &Exclusions, first: Option<EffortProblem<'a>>| {
+        rayon::join(
+            || {
+                let problem = match first {
+                    Some(p) if stops.iter().all(Vec::is_empty) => p,
+                    first => EffortProblem::new(model, &sig, &reading, excluded, &everything, rules.clone()).or(first)?,
+                };
+                let terms = problem.chosen_terms();
+                let findings = findings_with_stops(&problem, &terms, &stops);
+                Some((problem, terms, findings))
+            },
+            || {
+                let train = EffortProblem::new(model, &sig, &reading, excluded, &train, rules.clone()).map(|p| {
+                    let t = p.chosen_terms();
+                    (p, t)
+                });
+                let train_findings = train.as_ref().map(|(p, t)| findings_with_stops(p, t, &stops));
+                (train, train_findings)
+            },
+        )
+    };
+    let (whole, mut trained) = read(&excluded, Some(first));
+    let (mut problem, mut terms, mut findings) = whole?;
+    // Where dry friction holds a joint at rest, the reading is made again without its rests.
+    if let Some(without) = without_rests(&findings, problem.rows(), &sig, &excluded, rules)
+        && let (Some(whole), again) = read(&without, None)
+    {
+        (problem, terms, findings) = whole;
+        trained = again;
+    }
+    let (train, train_findings) = trained;
     let horizon_s = band.held_out_horizon_s();
     Some(Identified { band, horizon_s, sig, rows, problem, terms, train, stops, findings, train_findings, overruled: Vec::new() })
+}
+
+/// `excluded` with the rests that dry friction holds ([`super::rests`]) of each row of the
+/// reading `findings` (`rows`: its rows, over `sig`) left out too, widened by the filters'
+/// support (every filtered term there blends the rest in), where the row keeps
+/// [`SelectionRules::min_kept_without_rests`] of the recording; None where no row has such
+/// rests.
+fn without_rests(
+    findings: &[JointFinding],
+    rows: &[RowInfo],
+    sig: &Signals,
+    excluded: &Exclusions,
+    rules: &SelectionRules,
+) -> Option<Exclusions> {
+    let n = sig.time_s.len();
+    let usable = sig.usable.iter().filter(|&&u| u).count().max(1) as f64;
+    let mut out = Exclusions { samples: excluded.samples.clone(), rests: vec![None; findings.len()] };
+    for (r, (f, info)) in findings.iter().zip(rows).enumerate() {
+        let speed: Vec<f64> = sig.q[info.dof].iter().map(|x| x[1]).collect();
+        let used: Vec<bool> = (0..n).map(|i| sig.usable[i] && !excluded.samples[r][i]).collect();
+        let (Some(rests), Some(transition_speed)) = (held_rests(f, &speed, &used, rules), rest_transition(f)) else { continue };
+        let mut mask = excluded.samples[r].clone();
+        widen_into(&mut mask, &rests, &sig.time_s, sig.band.support_s());
+        if (mask.iter().filter(|&&x| !x).count() as f64) < rules.min_kept_without_rests * n as f64 {
+            continue;
+        }
+        let share = (0..n).filter(|&i| used[i] && mask[i]).count() as f64 / usable;
+        out.samples[r] = mask;
+        out.rests[r] = Some(RestsLeftOut { transition_speed, share });
+    }
+    out.rests.iter().any(Option::is_some).then_some(out)
 }
 
 /// A training reading without one term, replayed ([`HeldOutReplay::replay_without`]).
@@ -1256,12 +1297,26 @@ fn joint_outcome(
             1000.0 * band.sigma_s,
             super::smooth::GAUSS_HALF_GAIN_F_SIGMA / band.sigma_s,
             band.motion_hz
-        ) + &sign_question(f.model_correlation, unexplained(rules, f)),
+        ) + &rests_line(f)
+            + &sign_question(f.model_correlation, unexplained(rules, f)),
         effort_rms: Some(f.effort_rms),
         effort_residual: Some(RmsePair { rmse_before: f.cv_rms_before, rmse_after: f.cv_rms_after }),
         rejected: f.rejected.clone(),
     };
     JointOutcome { mismatches, effects, all, held, sq, series, analysis }
+}
+
+/// What the analysis says where the joint's rests were left out ([`super::rests`]); empty
+/// otherwise.
+fn rests_line(f: &JointFinding) -> String {
+    f.rests_left_out.map_or_else(String::new, |share| {
+        format!(
+            "; {:.0} % of the samples left out as rests its dry friction holds, with the filters' support around them \
+             (stuck, the friction is whatever holds the joint, not its law near zero speed; the law's transition is \
+             the one read with them)",
+            100.0 * share
+        )
+    })
 }
 
 /// What the report asks where the recorded effort runs against the effort the model needs

@@ -26,6 +26,7 @@ pub mod observe;
 pub mod plot;
 pub mod recording;
 pub mod report;
+pub mod rests;
 pub mod select;
 pub mod sim;
 pub mod smooth;
