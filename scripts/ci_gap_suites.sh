@@ -22,6 +22,8 @@ scripts/parallel.sh \
   "$py scripts/gap_suite.py --arms --arm-source builtin --out $suite_dir/arms --seed 0" \
   "$py scripts/gap_suite.py --arms --arm-source builtin --out $suite_dir/seed1/arms --seed 1" \
   "$py scripts/gap_suite.py --arms --arm-source builtin --out $suite_dir/seed3/arms --seed 3" \
+  "$py scripts/gap_suite.py --stuck-arms --arm-source builtin --out $suite_dir/stuck_arms --seed 0" \
+  "$py scripts/gap_suite.py --stuck-arms --arm-source builtin --out $suite_dir/seed1/stuck_arms --seed 1" \
   "$py scripts/gap_suite_bullet_arms.py --out $suite_dir/bullet_arms --seed 0" \
   "$py scripts/gap_suite_bullet_arms.py --out $suite_dir/seed1/bullet_arms --seed 1" \
   "$py scripts/gap_suite_physx.py --out $suite_dir/physx --seed 0"

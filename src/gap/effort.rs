@@ -133,8 +133,8 @@ pub struct SelectionRules {
     /// 6, lost its joint 2's sensor offset when they were left out; the stuck PUMA's joints are
     /// at 85 % and more).
     pub min_held_friction_over_gravity: f64,
-    /// Least share of the recording a joint's row keeps once its rests are left out
-    /// ([`super::rests`]); with less, they stay. The held-out blocks that judge every term see
+    /// Least share of the recording's usable samples a joint's row keeps once its rests are left
+    /// out ([`super::rests`]); with less, they stay. The held-out blocks that judge every term see
     /// too little of the joint otherwise: the plain-drive PUMA's wrist, left with 23 % of its
     /// training part, had its armature and offset better in only 4 of 6 blocks there, and the
     /// training reading without them replayed the wrist's held-out motion at 1.4 rad RMS against
@@ -1499,21 +1499,21 @@ impl EffortProblem<'_> {
                 })
             })
             .collect();
-        // Without its rests, the row keeps the transition read with them (one speed).
+        // Without its rests, the row keeps the transition read with them, and tries no Stribeck
+        // law (its break-away lives in the rests too: [`super::rests`]).
         let held = self.rests.get(r).copied().flatten().map(|h| h.transition_speed);
-        let grid: &[f64] = if held.is_some() { &TRANSITION_GRID[..1] } else { &TRANSITION_GRID };
+        let speeds: Vec<f64> = held.map_or_else(
+            || TRANSITION_GRID.iter().enumerate().filter(|&(k, &m)| k == 0 || m * v_rms <= widest).map(|(_, &m)| m * v_rms).collect(),
+            |vs| vec![vs],
+        );
         for smoothed in [false, true] {
-            for &m in grid {
-                let vs = held.unwrap_or(m * v_rms);
-                if held.is_none() && vs > widest && m > TRANSITION_GRID[0] {
-                    continue;
-                }
+            for &vs in &speeds {
                 sink.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], false, vec![dry(smoothed, &|x| (x[1] / vs).tanh())]);
                 let pos = dry(smoothed, &|x| if x[1] > 0.0 { (x[1] / vs).tanh() } else { 0.0 });
                 let neg = dry(smoothed, &|x| if x[1] < 0.0 { (x[1] / vs).tanh() } else { 0.0 });
                 sink.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], true, vec![pos, neg]);
             }
-            for (m, why) in STRIBECK_GRID.iter().zip(&unresolved) {
+            for (m, why) in STRIBECK_GRID.iter().zip(&unresolved).filter(|_| held.is_none()) {
                 let ss = m * v_rms;
                 let base = dry(smoothed, &|x| (x[1] / vt).tanh());
                 let extra = dry(smoothed, &|x| (-(x[1] / ss).powi(2)).exp() * (x[1] / vt).tanh());

@@ -15,7 +15,7 @@ use super::effort::{SelectionRules, Signals, Terms, signals};
 use super::effort::{in_serial_chain, moving_part};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
-use super::rests::{held_rests, transition_speed as rest_transition};
+use super::rests::held_rests;
 use super::smooth::Smoother;
 use super::stops::{FoundStop, StopRules, find_stops};
 use super::tilt::{base_lean, world_from_base};
@@ -363,7 +363,7 @@ fn identify_at<'a>(input: &BandInput<'a>, band: Bandwidth) -> Option<Identified<
         return None;
     }
     let everything = vec![true; n];
-    let train: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
+    let train_part: Vec<bool> = rec.time_s.iter().map(|&t| t < t_split).collect();
     // The model's efforts are the same for every reading below: computed once.
     let reading = ModelReading::new(model, &sig, gravity, &rows, rules)?;
     let mut excluded = Exclusions { samples: excluded, rests: Vec::new() };
@@ -374,39 +374,41 @@ fn identify_at<'a>(input: &BandInput<'a>, band: Bandwidth) -> Option<Identified<
             widen_into(&mut excluded.samples[r], &stop.contact, &rec.time_s, support_s);
         }
     }
-    // The whole recording's reading and the training part's are independent: in parallel. The
-    // whole one reuses `first` where no stop was left out.
-    let read = |excluded: &Exclusions, first: Option<EffortProblem<'a>>| {
-        rayon::join(
-            || {
-                let problem = match first {
-                    Some(p) if stops.iter().all(Vec::is_empty) => p,
-                    first => EffortProblem::new(model, &sig, &reading, excluded, &everything, rules.clone()).or(first)?,
-                };
-                let terms = problem.chosen_terms();
-                let findings = findings_with_stops(&problem, &terms, &stops);
-                Some((problem, terms, findings))
-            },
-            || {
-                let train = EffortProblem::new(model, &sig, &reading, excluded, &train, rules.clone()).map(|p| {
-                    let t = p.chosen_terms();
-                    (p, t)
-                });
-                let train_findings = train.as_ref().map(|(p, t)| findings_with_stops(p, t, &stops));
-                (train, train_findings)
-            },
-        )
+    // The whole recording's reading (reusing `first` where no stop was left out) and the training
+    // part's.
+    let read_whole = |excluded: &Exclusions, first: Option<EffortProblem<'a>>| {
+        let problem = match first {
+            Some(p) if stops.iter().all(Vec::is_empty) => p,
+            first => EffortProblem::new(model, &sig, &reading, excluded, &everything, rules.clone()).or(first)?,
+        };
+        let terms = problem.chosen_terms();
+        let findings = findings_with_stops(&problem, &terms, &stops);
+        Some((problem, terms, findings))
     };
-    let (whole, mut trained) = read(&excluded, Some(first));
+    let read_train = |excluded: &Exclusions| {
+        let train = EffortProblem::new(model, &sig, &reading, excluded, &train_part, rules.clone()).map(|p| {
+            let t = p.chosen_terms();
+            (p, t)
+        });
+        let train_findings = train.as_ref().map(|(p, t)| findings_with_stops(p, t, &stops));
+        (train, train_findings)
+    };
+    // The two are independent: in parallel.
+    let (whole, (mut train, mut train_findings)) = rayon::join(|| read_whole(&excluded, Some(first)), || read_train(&excluded));
     let (mut problem, mut terms, mut findings) = whole?;
-    // Where dry friction holds a joint at rest, the reading is made again without its rests.
-    if let Some(without) = without_rests(&findings, problem.rows(), &sig, &excluded, rules)
-        && let (Some(whole), again) = read(&without, None)
-    {
-        (problem, terms, findings) = whole;
-        trained = again;
+    // Where dry friction holds a joint at rest, both readings are made again without the rests the
+    // whole recording's reading finds, with the transition it read: the training part's leaves out
+    // the same rests so that its candidates are the whole reading's term for term (the held-out
+    // replay's settling reads one in the other's terms: `EffortProblem::read_as`); the held-out
+    // part takes part in choosing which samples are rests and the transition kept. Where either
+    // reading fails without them, both stay as they were.
+    if let Some(without) = without_rests(&findings, problem.rows(), &sig, &excluded, rules) {
+        let (whole, again) = rayon::join(|| read_whole(&without, None), || read_train(&without));
+        if let (Some(whole), (Some(t), f)) = (whole, again) {
+            (problem, terms, findings) = whole;
+            (train, train_findings) = (Some(t), f);
+        }
     }
-    let (train, train_findings) = trained;
     let horizon_s = band.held_out_horizon_s();
     Some(Identified { band, horizon_s, sig, rows, problem, terms, train, stops, findings, train_findings, overruled: Vec::new() })
 }
@@ -414,7 +416,7 @@ fn identify_at<'a>(input: &BandInput<'a>, band: Bandwidth) -> Option<Identified<
 /// `excluded` with the rests that dry friction holds ([`super::rests`]) of each row of the
 /// reading `findings` (`rows`: its rows, over `sig`) left out too, widened by the filters'
 /// support (every filtered term there blends the rest in), where the row keeps
-/// [`SelectionRules::min_kept_without_rests`] of the recording; None where no row has such
+/// [`SelectionRules::min_kept_without_rests`] of the usable samples; None where no row has such
 /// rests.
 fn without_rests(
     findings: &[JointFinding],
@@ -429,15 +431,15 @@ fn without_rests(
     for (r, (f, info)) in findings.iter().zip(rows).enumerate() {
         let speed: Vec<f64> = sig.q[info.dof].iter().map(|x| x[1]).collect();
         let used: Vec<bool> = (0..n).map(|i| sig.usable[i] && !excluded.samples[r][i]).collect();
-        let (Some(rests), Some(transition_speed)) = (held_rests(f, &speed, &used, rules), rest_transition(f)) else { continue };
+        let Some(held) = held_rests(f, &speed, &used, rules) else { continue };
         let mut mask = excluded.samples[r].clone();
-        widen_into(&mut mask, &rests, &sig.time_s, sig.band.support_s());
-        if (mask.iter().filter(|&&x| !x).count() as f64) < rules.min_kept_without_rests * n as f64 {
+        widen_into(&mut mask, &held.rests, &sig.time_s, sig.band.support_s());
+        if ((0..n).filter(|&i| sig.usable[i] && !mask[i]).count() as f64) < rules.min_kept_without_rests * usable {
             continue;
         }
         let share = (0..n).filter(|&i| used[i] && mask[i]).count() as f64 / usable;
         out.samples[r] = mask;
-        out.rests[r] = Some(RestsLeftOut { transition_speed, share });
+        out.rests[r] = Some(RestsLeftOut { transition_speed: held.transition_speed, share });
     }
     out.rests.iter().any(Option::is_some).then_some(out)
 }

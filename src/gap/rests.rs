@@ -7,8 +7,8 @@
 //! a blend of the rest and the motion), the law is pulled towards whatever pushed while the joint
 //! stuck: the Robotics Toolbox's PUMA 560 under a plain computed-torque drive (its friction not
 //! fed forward), stuck 14–53 % of the time on its six joints, had 8 of its 18 joints over three
-//! seeds read right, its viscous damping missed on up to five joints and its dry friction up to
-//! 16 % high. Robot identification leaves samples near zero speed out of friction fits for this
+//! seeds read right, its viscous damping missed on up to four joints a seed and two false
+//! positives. Robot identification leaves samples near zero speed out of friction fits for this
 //! reason.
 //!
 //! Only rests that are rests: a joint that turns round smoothly passes through zero speed as
@@ -23,20 +23,43 @@
 //! above its friction's level ([`SelectionRules::min_held_friction_over_gravity`]), its rests
 //! still weigh the links it carries (what the model's own first-moment error and a sensor's
 //! offset are told apart by), and the friction's share of them is a small error on that.
+//!
+//! The rests are left out with the filters' support around them, where a third of the usable
+//! samples stay (`effort_mode::without_rests`: the recording and its training part both read
+//! without the rests the whole recording's reading finds), and the readings are made again. The
+//! joint's Coulomb candidates then keep the transition read with the rests, and no Stribeck law
+//! is tried: its break-away, like the transition, lives in the samples left out.
 
+use super::effects::EffectKind;
 use super::effort::{JointFinding, SelectionRules};
 
-/// The samples where one joint rests held by the dry friction of its reading `finding` (not yet
-/// widened by the filters' support), or None where its rests stay in effort space: no dry
-/// friction of a single transition (`coulomb_friction`) in the reading, a friction small beside
-/// the gravity effort the joint carries, or a joint that does not dwell at rest (see the module
-/// documentation). `speed` is the joint's smoothed speed per sample; `used`, the samples its
-/// effort row uses.
+/// One joint's rests that its dry friction holds ([`held_rests`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldRests {
+    /// Per sample: a rest (not yet widened by the filters' support).
+    pub rests: Vec<bool>,
+    /// The transition speed of the joint's dry friction, read with the rests (rad/s or m/s): what
+    /// a reading without them keeps, since the samples that show a law's shape through zero speed
+    /// are the ones left out.
+    pub transition_speed: f64,
+}
+
+/// Where one joint rests held by the dry friction of its reading `finding`, or None where its
+/// rests stay in effort space: no dry friction of a single transition (`coulomb_friction`) in the
+/// reading, a friction small beside the gravity effort the joint carries, or a joint that does not
+/// dwell at rest (see the module documentation). `speed` is the joint's smoothed speed per sample;
+/// `used`, the samples its effort row may use (usable, not left out already). A joint's sizes
+/// (its effort, gravity and inertial RMS, against which every term is judged) are then measured
+/// over the samples it keeps.
 #[must_use]
-pub fn held_rests(finding: &JointFinding, speed: &[f64], used: &[bool], rules: &SelectionRules) -> Option<Vec<bool>> {
-    let (level, _) = finding.friction_at_rest()?;
-    finding.effects.iter().find(|e| e.kind == super::effects::EffectKind::CoulombFriction)?;
-    if !(level > 0.0 && level >= rules.min_held_friction_over_gravity * finding.gravity_rms) {
+pub fn held_rests(finding: &JointFinding, speed: &[f64], used: &[bool], rules: &SelectionRules) -> Option<HeldRests> {
+    let law = finding.effects.iter().find(|e| e.kind == EffectKind::CoulombFriction)?;
+    let level = law.params[0].max(law.params.get(2).map_or(0.0, |r| r.abs()));
+    let transition_speed = law.params[1];
+    if !(level > 0.0 && transition_speed.is_finite() && transition_speed > 0.0) {
+        return None;
+    }
+    if level < rules.min_held_friction_over_gravity * finding.gravity_rms {
         return None;
     }
     let kept: Vec<f64> = speed.iter().zip(used).filter(|(v, u)| **u && v.is_finite()).map(|(v, _)| *v).collect();
@@ -50,21 +73,13 @@ pub fn held_rests(finding: &JointFinding, speed: &[f64], used: &[bool], rules: &
     if below == 0 || below as f64 <= rules.min_dwell_ratio * next as f64 {
         return None;
     }
-    Some(speed.iter().zip(used).map(|(v, u)| *u && v.abs() < slow).collect())
-}
-
-/// The transition speed of the dry friction in `finding` (`coulomb_friction`'s): what a reading
-/// without the joint's rests keeps, since the samples that show a law's shape through zero speed
-/// are the ones left out.
-#[must_use]
-pub fn transition_speed(finding: &JointFinding) -> Option<f64> {
-    finding.effects.iter().find(|e| e.kind == super::effects::EffectKind::CoulombFriction).map(|e| e.params[1])
+    Some(HeldRests { rests: speed.iter().zip(used).map(|(v, u)| *u && v.abs() < slow).collect(), transition_speed })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gap::effects::{Effect, EffectKind};
+    use crate::gap::effects::Effect;
 
     /// A finding on one joint with Coulomb friction of `level` and the gravity effort `gravity_rms`.
     fn finding(level: f64, gravity_rms: f64) -> JointFinding {
@@ -106,8 +121,9 @@ mod tests {
     fn check((hold, level, gravity_rms): (usize, f64, f64), expected: Option<usize>) {
         let v = speed(hold);
         let used = vec![true; v.len()];
-        let rests = held_rests(&finding(level, gravity_rms), &v, &used, &SelectionRules::default());
-        assert_eq!(rests.map(|r| r.iter().filter(|&&x| x).count()), expected, "hold {hold}, level {level}, gravity {gravity_rms}");
+        let held = held_rests(&finding(level, gravity_rms), &v, &used, &SelectionRules::default());
+        assert!(held.as_ref().is_none_or(|h| (h.transition_speed - 0.01).abs() < 1e-15), "the reading's transition is kept");
+        assert_eq!(held.map(|h| h.rests.iter().filter(|&&x| x).count()), expected, "hold {hold}, level {level}, gravity {gravity_rms}");
     }
 
     #[test]
