@@ -762,14 +762,9 @@ impl JointFinding {
     }
 
     /// The static level and the speed below which the joint counts as at rest, of the dry
-    /// friction found on it (`coulomb_friction`: the larger of its two levels within its
-    /// transition speed; `stribeck_friction`: its break-away within its Stribeck speed).
+    /// friction found on it ([`dry_friction_at_rest`] of its first dry-friction effect).
     pub(super) fn friction_at_rest(&self) -> Option<(f64, f64)> {
-        self.effects.iter().find_map(|e| match e.kind {
-            EffectKind::CoulombFriction => Some((e.params[0].max(e.params[2].abs()).max(0.0), e.params[1])),
-            EffectKind::StribeckFriction => Some((e.params[0].max(e.params[1]).max(0.0), e.params[2])),
-            _ => None,
-        })
+        self.effects.iter().find_map(dry_friction_at_rest)
     }
 
     /// The finding with dry friction granted its whole range at rest. Stuck, a joint's friction
@@ -799,6 +794,18 @@ impl JointFinding {
             return self.clone();
         }
         Self { cv_rms_after: self.cv_rms_after * after / before, residual_after, ..self.clone() }
+    }
+}
+
+/// The static level and the speed below which the joint counts as at rest of a dry-friction
+/// effect in the effort-mode parameter layout (`coulomb_friction`: the larger of its two levels
+/// within its transition speed; `stribeck_friction`: its break-away within its Stribeck speed);
+/// None for any other kind.
+pub(super) fn dry_friction_at_rest(e: &Effect) -> Option<(f64, f64)> {
+    match e.kind {
+        EffectKind::CoulombFriction => Some((e.params[0].max(e.params[2].abs()).max(0.0), e.params[1])),
+        EffectKind::StribeckFriction => Some((e.params[0].max(e.params[1]).max(0.0), e.params[2])),
+        _ => None,
     }
 }
 
@@ -1076,7 +1083,8 @@ pub fn moving_part(tree: &MultiBody, body: usize) -> Vec<usize> {
     out
 }
 
-fn rms(v: impl Iterator<Item = f64>) -> f64 {
+/// RMS of the finite values of `v` (0 without one).
+pub(super) fn rms(v: impl Iterator<Item = f64>) -> f64 {
     let (s, c) = v.filter(|x| x.is_finite()).fold((0.0, 0usize), |(s, c), x| (s + x * x, c + 1));
     if c == 0 { 0.0 } else { (s / c as f64).sqrt() }
 }
@@ -1482,8 +1490,13 @@ impl EffortProblem<'_> {
         let unit = if rotational { "rad/s" } else { "m/s" };
         // The narrowest transition is kept on any joint, so that a law is always tried.
         let widest = if rotational { self.rules.max_transition_speed.0 } else { self.rules.max_transition_speed.1 };
-        // Per Stribeck speed, why the recording cannot tell its law (either reading) from Coulomb's.
-        let unresolved: Vec<Option<String>> = STRIBECK_GRID
+        // Without its rests, the row keeps the transition read with them, and tries no Stribeck
+        // law (its break-away lives in the rests too: [`super::rests`]).
+        let held = self.rests.get(r).copied().flatten().map(|h| h.transition_speed);
+        // Per Stribeck speed tried, why the recording cannot tell its law (either reading) from
+        // Coulomb's.
+        let stribeck_grid: &[f64] = if held.is_some() { &[] } else { &STRIBECK_GRID };
+        let unresolved: Vec<Option<String>> = stribeck_grid
             .iter()
             .map(|&m| {
                 let zone = (STRIBECK_ZONE.0 * vt, STRIBECK_ZONE.1 * m * v_rms);
@@ -1499,9 +1512,6 @@ impl EffortProblem<'_> {
                 })
             })
             .collect();
-        // Without its rests, the row keeps the transition read with them, and tries no Stribeck
-        // law (its break-away lives in the rests too: [`super::rests`]).
-        let held = self.rests.get(r).copied().flatten().map(|h| h.transition_speed);
         let speeds: Vec<f64> = held.map_or_else(
             || TRANSITION_GRID.iter().enumerate().filter(|&(k, &m)| k == 0 || m * v_rms <= widest).map(|(_, &m)| m * v_rms).collect(),
             |vs| vec![vs],
@@ -1513,7 +1523,7 @@ impl EffortProblem<'_> {
                 let neg = dry(smoothed, &|x| if x[1] < 0.0 { (x[1] / vs).tanh() } else { 0.0 });
                 sink.push(r, EffectKind::CoulombFriction, Family::Friction, vec![vs], true, vec![pos, neg]);
             }
-            for (m, why) in STRIBECK_GRID.iter().zip(&unresolved).filter(|_| held.is_none()) {
+            for (m, why) in stribeck_grid.iter().zip(&unresolved) {
                 let ss = m * v_rms;
                 let base = dry(smoothed, &|x| (x[1] / vt).tanh());
                 let extra = dry(smoothed, &|x| (-(x[1] / ss).powi(2)).exp() * (x[1] / vt).tanh());

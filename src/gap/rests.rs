@@ -31,7 +31,7 @@
 //! is tried: its break-away, like the transition, lives in the samples left out.
 
 use super::effects::EffectKind;
-use super::effort::{JointFinding, SelectionRules};
+use super::effort::{JointFinding, SelectionRules, dry_friction_at_rest, rms};
 
 /// One joint's rests that its dry friction holds ([`held_rests`]).
 #[derive(Debug, Clone, PartialEq)]
@@ -54,8 +54,7 @@ pub struct HeldRests {
 #[must_use]
 pub fn held_rests(finding: &JointFinding, speed: &[f64], used: &[bool], rules: &SelectionRules) -> Option<HeldRests> {
     let law = finding.effects.iter().find(|e| e.kind == EffectKind::CoulombFriction)?;
-    let level = law.params[0].max(law.params.get(2).map_or(0.0, |r| r.abs()));
-    let transition_speed = law.params[1];
+    let (level, transition_speed) = dry_friction_at_rest(law)?;
     if !(level > 0.0 && transition_speed.is_finite() && transition_speed > 0.0) {
         return None;
     }
@@ -66,7 +65,7 @@ pub fn held_rests(finding: &JointFinding, speed: &[f64], used: &[bool], rules: &
     if kept.is_empty() {
         return None;
     }
-    let v_rms = (kept.iter().map(|v| v * v).sum::<f64>() / kept.len() as f64).sqrt();
+    let v_rms = rms(kept.iter().copied());
     let slow = rules.rest_speed_share * v_rms;
     let below = kept.iter().filter(|v| v.abs() < slow).count();
     let next = kept.iter().filter(|v| (slow..2.0 * slow).contains(&v.abs())).count();
