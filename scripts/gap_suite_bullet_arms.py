@@ -143,6 +143,31 @@ def identified(text, share, rng):
     return re.sub(r"<inertial>.*?</inertial>", link, text, flags=re.S)
 
 
+ZERO_INERTIAL = ('<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
+                 '</inertial>')
+
+
+def massless_made_explicit(text):
+    """Every link of no mass made massless alike, its rotational inertia zeroed (and one without an <inertial> given
+    that zero one): readers disagree on a link of mass 0 with rotational inertia (the Panda's link 8 and grasp
+    target: 0.1 kg m^2 each), which no body has. Drake's parser replaces it by 1 kg at the link's origin, Bullet
+    keeps its inertia, MuJoCo drops it (gap_suite_drake_arms.py and gap_suite_genesis_arms.py load it so)."""
+
+    def inertial(match):
+        mass = re.search(r'<mass\s+value="([^"]+)"', match[0])
+        return ZERO_INERTIAL if mass is None or float(mass[1]) == 0.0 else match[0]
+
+    def link(match):
+        whole = match[0]
+        if "<inertial>" in whole:
+            return re.sub(r"<inertial>.*?</inertial>", inertial, whole, flags=re.S)
+        if whole.endswith("/>"):
+            return whole[:-2].rstrip() + f">{ZERO_INERTIAL}</link>"
+        return whole.replace("</link>", f"{ZERO_INERTIAL}</link>")
+
+    return re.sub(r"<link\s[^>]*?/>|<link\s[^>]*?>.*?</link>", link, text, flags=re.S)
+
+
 class BulletArm(gs.BulletSim):
     """An arm in pybullet DIRECT, loaded from URDF text: gap_suite.BulletSim's stepping (TORQUE_CONTROL before
     every step), state and dynamics, with friction motors and joint damping per joint (`joints`, in order)."""
@@ -186,14 +211,7 @@ def run_case(case, seed, out):
     plant = BulletArm(engine_text, joints, case.friction, case.damping, gravity)
     tilt = base_tilt_effect(plant, case) if case.base_tilt else None
     traj, table, effort_sigma = drive(plant, nominal, case, rng)
-    folder = os.path.join(out, case.name)
-    os.makedirs(folder, exist_ok=True)
     source_path = "/".join(robot.path)
-    note = f"<!-- pybullet_data {source_path} without geometry and without joint damping, fingers (if any) welded"
-    note += "; inertial parameters drawn up to 5 % off (an identified model) -->" if case.model_error > 0 else " -->"
-    with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
-        f.write(model_text.replace("<robot ", f"{note}\n<robot ", 1))
-    gs.write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf", "gravity": "0 0 -9.81"})
     model_effort = gs.inverse_dynamics(nominal, traj, np.gradient(traj.qd, traj.t, axis=0))
     tilt_effort = None
     if tilt is not None:
@@ -207,8 +225,27 @@ def run_case(case, seed, out):
     engine_detail = (f"{ENGINE}, pybullet_data {source_path} (no geometry, no joint damping of its own, fingers welded), "
                      f"DIRECT, fixed base, {DT} s steps, link damping 0, torques through TORQUE_CONTROL set before every step")
     truth = arm_truth(ENGINE, case, seed, (detail, engine_detail), traj, effort_sigma, model_effort, (tilt, tilt_effort))
-    gs.write_json(os.path.join(folder, "truth.json"), truth)
+    write_arm_case(out, case, (model_text, shipped_note(robot, case)), table, truth)
     return gs.summary_line(case, traj, truth)
+
+
+def shipped_note(robot, case):
+    """What a case's model.urdf is, for a comment before its <robot>: the shipped URDF as shipped_urdf prepares it,
+    and whether its inertias were drawn off (identified)."""
+    note = f"pybullet_data {'/'.join(robot.path)} without geometry and without joint damping, fingers (if any) welded"
+    return note + ("; inertial parameters drawn up to 5 % off (an identified model)" if case.model_error > 0 else "")
+
+
+def write_arm_case(out, case, model, table, truth):
+    """The case's folder DIR/<case>/: model.urdf (`model` is its text and the note put in a comment before its
+    <robot>), recording.csv of `table` and truth.json."""
+    model_text, note = model
+    folder = os.path.join(out, case.name)
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
+        f.write(model_text.replace("<robot ", f"<!-- {note} -->\n<robot ", 1))
+    gs.write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf", "gravity": "0 0 -9.81"})
+    gs.write_json(os.path.join(folder, "truth.json"), truth)
 
 
 def drive(plant, nominal, case, rng, offsets=None):

@@ -122,31 +122,6 @@ def cases():
     ]
 
 
-ZERO_INERTIAL = ('<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
-                 '</inertial>')
-
-
-def massless_made_explicit(text):
-    """Every link of no mass made massless alike, its rotational inertia zeroed (and one without an <inertial> given
-    that zero one): readers disagree on a link of mass 0 with rotational inertia (the Panda's link 8 and grasp
-    target: 0.1 kg m^2 each), which no body has. Drake's parser replaces it by 1 kg at the link's origin, Bullet
-    keeps its inertia, MuJoCo drops it."""
-
-    def inertial(match):
-        mass = re.search(r'<mass\s+value="([^"]+)"', match[0])
-        return ZERO_INERTIAL if mass is None or float(mass[1]) == 0.0 else match[0]
-
-    def link(match):
-        whole = match[0]
-        if "<inertial>" in whole:
-            return re.sub(r"<inertial>.*?</inertial>", inertial, whole, flags=re.S)
-        if whole.endswith("/>"):
-            return whole[:-2].rstrip() + f">{ZERO_INERTIAL}</link>"
-        return whole.replace("</link>", f"{ZERO_INERTIAL}</link>")
-
-    return re.sub(r"<link\s[^>]*?/>|<link\s[^>]*?>.*?</link>", link, text, flags=re.S)
-
-
 def root_link(text):
     """The URDF's root link: the one that is no joint's child."""
     links = re.findall(r'<link\s+name="([^"]+)"', text)
@@ -248,7 +223,7 @@ def run_case(case, seed, out):
     rng = gs.case_rng(seed, case.name)
     robot = bullet.ROBOTS[case.robot]
     joints = robot.joints
-    engine_text = massless_made_explicit(bullet.shipped_urdf(robot))
+    engine_text = bullet.massless_made_explicit(bullet.shipped_urdf(robot))
     bare = DrakeArm(engine_text, joints)
     check_rigid(bare, engine_text, rng)
     model_text = bullet.identified(engine_text, case.model_error, rng) if case.model_error > 0 else engine_text
@@ -259,9 +234,7 @@ def run_case(case, seed, out):
     bare.close()
     tilt = base_tilt_effect(plant, case) if case.base_tilt else None
     traj, table, effort_sigma = bullet.drive(plant, nominal, case, rng, case.offset)
-    source_path = "/".join(robot.path)
-    note = f"pybullet_data {source_path} without geometry and without joint damping, fingers (if any) welded"
-    note += "; inertial parameters drawn up to 5 % off (an identified model)" if case.model_error > 0 else ""
+    note = bullet.shipped_note(robot, case)
     model_effort = gs.inverse_dynamics(nominal, traj, np.gradient(traj.qd, traj.t, axis=0))
     tilt_effort = None
     if tilt is not None:
@@ -285,12 +258,7 @@ def run_case(case, seed, out):
                      f"rigid bodies checked against MuJoCo's reading of the same URDF to {CHECK_RTOL:g}")
     truth = bullet.arm_truth(ENGINE, case, seed, (detail, engine_detail), traj, effort_sigma, model_effort,
                              (tilt, tilt_effort))
-    folder = os.path.join(out, case.name)
-    os.makedirs(folder, exist_ok=True)
-    with open(os.path.join(folder, "model.urdf"), "w", encoding="utf-8") as f:
-        f.write(model_text.replace("<robot ", f"<!-- {note} -->\n<robot ", 1))
-    gs.write_csv(os.path.join(folder, "recording.csv"), table, {"model": "model.urdf", "gravity": "0 0 -9.81"})
-    gs.write_json(os.path.join(folder, "truth.json"), truth)
+    bullet.write_arm_case(out, case, (model_text, note), table, truth)
     return gs.summary_line(case, traj, truth)
 
 
