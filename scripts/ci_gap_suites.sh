@@ -73,5 +73,7 @@ python3 -m venv "$venvs/genesis"
   -r scripts/gap_suite_genesis_requirements.txt
 scripts/parallel.sh \
   "$venvs/genesis/bin/python scripts/gap_suite_genesis_arms.py --out $suite_dir/genesis_arms --seed 0" \
-  "$venvs/genesis/bin/python scripts/gap_suite_genesis_arms.py --out $suite_dir/seed1/genesis_arms --seed 1"
+  "$venvs/genesis/bin/python scripts/gap_suite_genesis_arms.py --out $suite_dir/seed1/genesis_arms --seed 1" \
+  "$venvs/genesis/bin/python scripts/gap_suite_genesis.py --out $suite_dir/genesis --seed 0" \
+  "$venvs/genesis/bin/python scripts/gap_suite_genesis.py --out $suite_dir/seed1/genesis --seed 1"
 echo "CI: gap suite recordings made in $SECONDS s"

@@ -49,7 +49,6 @@ joint), smooth over 0.05 rad/s (within the 0.05-0.4 rad/s real joints' friction 
 inertia sized so that each is material (truth.json's visibility_effort_share has each one's share).
 """
 import math
-import os
 import re
 from dataclasses import dataclass, field
 from importlib import metadata

@@ -43,8 +43,6 @@ Excitation: gap_suite.arm_excitation, the MuJoCo, Bullet and Drake arm suites': 
 200 Hz and held; the controller knows none of the concealed effects. Noise: 1e-4 rad on positions, 1 % of each
 joint's RMS effort on efforts.
 """
-import os
-import tempfile
 from dataclasses import dataclass, field
 from importlib import metadata
 
@@ -54,6 +52,7 @@ import numpy as np
 
 import gap_suite as gs
 import gap_suite_bullet_arms as bullet
+import gap_suite_genesis as genesis_suite
 from gap_suite import DT, SuiteError
 
 ENGINE = f"genesis {metadata.version('genesis-world')}"
@@ -109,51 +108,20 @@ def cases():
     ]
 
 
-class GenesisArm:
-    """An arm in a Genesis scene of its own, loaded from URDF text by Genesis's importer: the joints `joints` (in
-    order), efforts held between steps (control_dofs_force), effects set per joint on the built scene."""
+class GenesisArm(genesis_suite.GenesisScene):
+    """An arm in a Genesis scene of its own, loaded from URDF text by Genesis's importer (gap_suite_genesis.py's
+    scene): the joints `joints` (in order), effects set per joint on the built scene."""
 
     def __init__(self, text, joints):
-        with tempfile.TemporaryDirectory() as folder:
-            path = os.path.join(folder, "arm.urdf")
-            with open(path, "w", encoding="utf-8") as f:
-                f.write(text)
-            self.scene = genesis.Scene(
-                sim_options=genesis.options.SimOptions(dt=DT, substeps=1, gravity=tuple(gs.GRAVITY)),
-                rigid_options=genesis.options.RigidOptions(enable_collision=False, enable_self_collision=False),
-                show_viewer=False)
-            self.entity = self.scene.add_entity(genesis.morphs.URDF(file=path, fixed=True))
-            self.scene.build()
-        self.names = list(joints)
-        self.idx = [self.entity.get_joint(name).dofs_idx_local[0] for name in joints]
-        if self.entity.n_dofs != len(joints):
-            raise SuiteError(f"Genesis made {self.entity.n_dofs} degrees of freedom of the arm, {len(joints)} expected")
+        super().__init__(text, joints)
         lo, hi = self.entity.get_dofs_limit(self.idx)
         self.lo, self.hi = np.asarray(lo, float), np.asarray(hi, float)
         self.imported_armature = np.asarray(self.entity.get_dofs_armature(self.idx), float)
-        self.effort = np.zeros(len(joints))
-        self.hold(self.effort)
 
     def set_effects(self, friction, damping, armature):
         for setter, values in ((self.entity.set_dofs_frictionloss, friction), (self.entity.set_dofs_damping, damping),
                                (self.entity.set_dofs_armature, armature)):
             setter(np.asarray(values, float), self.idx)
-
-    def set_state(self, q, qd):
-        self.entity.set_dofs_position(np.asarray(q, float), self.idx)
-        self.entity.set_dofs_velocity(np.asarray(qd, float), self.idx)
-
-    def state(self):
-        return (np.asarray(self.entity.get_dofs_position(self.idx), float).copy(),
-                np.asarray(self.entity.get_dofs_velocity(self.idx), float).copy())
-
-    def hold(self, effort):
-        self.effort = np.asarray(effort, float).copy()
-        self.entity.control_dofs_force(self.effort, self.idx)
-
-    def advance(self, steps):
-        for _ in range(int(steps)):
-            self.scene.step()
 
     def close(self):
         """Nothing: the scene is kept for the robot's next case (arm_of), its effects set again there."""
