@@ -384,6 +384,13 @@ pub fn signals(time_s: &[f64], positions: &[Vec<f64>], efforts: &[Option<Vec<f64
 }
 
 impl Signals {
+    /// Dof `d`'s smoothed speed per sample (rad/s or m/s): the speed the friction laws, the
+    /// reversals and the rests are judged on.
+    #[must_use]
+    pub fn speed(&self, d: usize) -> Vec<f64> {
+        self.q[d].iter().map(|x| x[1]).collect()
+    }
+
     /// A term of the equation of motion evaluated at every sample from the narrowly
     /// differentiated positions of dof `d`, then filtered like the efforts; NaN outside `keep`.
     fn term(&self, d: usize, keep: &[bool], f: &dyn Fn([f64; 3]) -> f64) -> Vec<f64> {
@@ -1240,7 +1247,7 @@ impl<'a> EffortProblem<'a> {
             .iter()
             .zip(&problem.used)
             .map(|(row, used)| {
-                let speed: Vec<f64> = sig.q[row.dof].iter().map(|x| x[1]).collect();
+                let speed = sig.speed(row.dof);
                 let near = near_reversals(&sig.time_s, &speed, sig.band.support_s());
                 let (count, away) =
                     (0..near.len()).filter(|&i| used[i]).fold((0usize, 0usize), |(c, a), i| (c + 1, a + usize::from(!near[i])));

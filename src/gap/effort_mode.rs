@@ -429,7 +429,7 @@ fn without_rests(
     let usable = sig.usable.iter().filter(|&&u| u).count().max(1) as f64;
     let mut out = Exclusions { samples: excluded.samples.clone(), rests: vec![None; findings.len()] };
     for (r, (f, info)) in findings.iter().zip(rows).enumerate() {
-        let speed: Vec<f64> = sig.q[info.dof].iter().map(|x| x[1]).collect();
+        let speed = sig.speed(info.dof);
         let used: Vec<bool> = (0..n).map(|i| sig.usable[i] && !excluded.samples[r][i]).collect();
         let Some(held) = held_rests(f, &speed, &used, rules) else { continue };
         let mut mask = excluded.samples[r].clone();
@@ -1043,7 +1043,7 @@ pub(super) fn analyze_effort_space(
         // static range where the joint rests is friction, not `unknown` (it still lets a lone
         // joint's exact simulation, which sticks, choose the terms again).
         let smooth_law_unexplained = unexplained(&rules, f);
-        let speed: Vec<f64> = sig.q[d].iter().map(|x| x[1]).collect();
+        let speed = sig.speed(d);
         let f = &f.with_friction_at_rest(&speed);
         let mut outcome = joint_outcome(&band, model, rec, cfg, &rules, f, y, &replays, gravity, t_split);
         if in_serial_chain(model, f.joint) {
