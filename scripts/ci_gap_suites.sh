@@ -16,6 +16,13 @@ suite_dir="$2"
 # the recordings are the same).
 py="$venvs/suite/bin/python"
 suite_pip=("$venvs/suite/bin/pip" install --quiet --disable-pip-version-check)
+# Genesis's environment of its own (its requirements, torch among them, would move versions the other
+# engines' recordings are made with): mostly download, made in the background while the first
+# engines' recordings are made.
+(python3 -m venv "$venvs/genesis" &&
+  "$venvs/genesis/bin/pip" install --quiet --disable-pip-version-check --only-binary=:all: \
+    -r scripts/gap_suite_genesis_requirements.txt) &
+genesis_env=$!
 scripts/parallel.sh \
   "$py scripts/gap_suite.py --out $suite_dir/objects --seed 0" \
   "$py scripts/gap_suite.py --out $suite_dir/seed1/objects --seed 1" \
@@ -66,11 +73,12 @@ scripts/parallel.sh \
 scripts/parallel.sh \
   "$py scripts/gap_suite_rtb.py --out $suite_dir/rtb --seed 0" \
   "$py scripts/gap_suite_rtb.py --out $suite_dir/seed1/rtb --seed 1"
-# Genesis (an eleventh engine, held out until its cases were written): an environment of its own,
-# as its requirements (torch among them) would move versions the recordings above were made with.
-python3 -m venv "$venvs/genesis"
-"$venvs/genesis/bin/pip" install --quiet --disable-pip-version-check --only-binary=:all: \
-  -r scripts/gap_suite_genesis_requirements.txt
+# Genesis (an eleventh engine, held out until its cases were written): its environment, made in the
+# background from the start (above), is waited for here.
+if ! wait "$genesis_env"; then
+  echo "CI: cannot install the 'genesis' environment from PyPI (scripts/gap_suite_genesis_requirements.txt)" >&2
+  exit 1
+fi
 scripts/parallel.sh \
   "$venvs/genesis/bin/python scripts/gap_suite_genesis_arms.py --out $suite_dir/genesis_arms --seed 0" \
   "$venvs/genesis/bin/python scripts/gap_suite_genesis_arms.py --out $suite_dir/seed1/genesis_arms --seed 1" \

@@ -101,6 +101,9 @@ class ArmCase:
 
 FRICTION = [2.0, 2.0, 0.8, 0.8, 0.03, 0.02, 0.003]
 PANDA_FRICTION = [1.0, 1.0, 0.8, 0.8, 0.3, 0.2, 0.05]
+# Rotor inertia as a geared iiwa has it (the Drake and Genesis arm suites): a sizeable share of each joint's own
+# inertia, more on the wrist.
+IIWA_ROTOR = [0.3, 0.3, 0.1, 0.1, 0.02, 0.02, 0.005]
 
 
 def cases():

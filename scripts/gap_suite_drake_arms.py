@@ -94,8 +94,7 @@ class ArmCase(bullet.ArmCase):
 
 IIWA_FRICTION = bullet.FRICTION
 PANDA_FRICTION = bullet.PANDA_FRICTION
-# Rotor inertia as a geared arm has it: a sizeable share of each joint's own inertia, more on the wrist.
-IIWA_ROTOR = [0.3, 0.3, 0.1, 0.1, 0.02, 0.02, 0.005]
+# The Panda's rotor inertia, sized as bullet.IIWA_ROTOR is: a sizeable share of each joint's own inertia.
 PANDA_ROTOR = [0.2, 0.2, 0.1, 0.1, 0.05, 0.05, 0.02]
 
 
@@ -104,7 +103,7 @@ def cases():
         ArmCase("drake_iiwa_none", "iiwa; nothing missing", "iiwa"),
         ArmCase("drake_iiwa_friction", "iiwa; smooth dry friction (DoorHinge) on every joint", "iiwa", friction=IIWA_FRICTION),
         ArmCase("drake_iiwa_rotor_damping", "iiwa; rotor inertia on every joint, damping on joints 2, 4, 6", "iiwa",
-                damping=[0.0, 1.0, 0.0, 0.3, 0.0, 0.004, 0.0], armature=IIWA_ROTOR),
+                damping=[0.0, 1.0, 0.0, 0.3, 0.0, 0.004, 0.0], armature=bullet.IIWA_ROTOR),
         ArmCase("drake_iiwa_identified_model", "iiwa; smooth dry friction on every joint, sensor biases on joints 2 "
                 "and 4, model.urdf's inertias up to 5 % off", "iiwa", friction=IIWA_FRICTION,
                 offset=[0.0, 1.0, 0.0, -0.5, 0.0, 0.0, 0.0], model_error=0.05),

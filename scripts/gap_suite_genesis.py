@@ -12,11 +12,12 @@ DIR/<case>/ with model.urdf, recording.csv and truth.json exactly as gap_suite.p
 
 Engine: the engine's bodies written as URDF (model.urdf, with a heavier link or a narrower joint range where the case
 conceals one) read by Genesis's own URDF importer (gs.morphs.URDF, fixed=True: the root link welded to the world)
-into a scene of its own: gravity -9.81 z, 1 ms steps, one substep, collisions off, Genesis's default integrator and
-constraint solver, hibernation off (its default). Efforts are generalized forces set by control_dofs_force at each
-sample and held between samples. What Genesis's importer adds and URDF cannot say is taken out: the rotor inertia it
-gives every joint (dofs_armature 0.1 kg m^2 in genesis-world 1.4) is set to what the case conceals, zero where none
-(gap_suite_genesis_arms.py keeps it in one case). A stop is model.urdf's joint range as Genesis enforces it: a
+into a scene of its own: gravity -9.81 z, 1 ms steps, one substep, collisions off, Genesis's default integrator
+(approximate_implicitfast) and constraint solver, hibernation off (its default). Efforts are generalized forces set by control_dofs_force at each
+sample and held between samples. What Genesis adds to a URDF and URDF cannot say is taken out: the
+rotor inertia its URDF morph fills in at build for every one-dof joint left at zero (default_armature, 0.1 kg m^2 in
+genesis-world 1.4) is set to what the case conceals, zero where none (gap_suite_genesis_arms.py keeps it in one
+case), and the bound the importer puts on each joint's applied force (the URDF's <limit effort>) is lifted. A stop is model.urdf's joint range as Genesis enforces it: a
 joint-limit row of its constraint solver (soft, as MuJoCo's; restitution measured).
 
 Concealed effects, each made the way Genesis's API makes it (set on the built scene):
@@ -84,6 +85,10 @@ class GenesisScene:
             raise SuiteError(f"Genesis made {self.entity.n_dofs} degrees of freedom of a model of {len(self.names)} "
                              "joints")
         self.idx = [self.entity.get_joint(name).dofs_idx_local[0] for name in self.names]
+        # The importer bounds each joint's applied force by the URDF's <limit effort> (the Panda's wrist: 12 N m),
+        # silently: the recording's efforts must be the ones the engine applied, so the bound is lifted.
+        unbounded = np.full(len(self.names), np.inf)
+        self.entity.set_dofs_force_range(-unbounded, unbounded, self.idx)
         self.effort = np.zeros(len(self.names))
         self.hold(self.effort)
 
@@ -119,7 +124,6 @@ class GenesisSim(GenesisScene):
         self._set("armature", [p["armature"] for p in params])
         self.limits = [np.asarray(x, float).copy() for x in self.entity.get_dofs_limit(self.idx)]
         self.mujoco = gs.MujocoSim(gs.mujoco_model(mech, []), self.names)
-        self.hold(self.effort)
 
     def _set(self, what, values):
         getattr(self.entity, f"set_dofs_{what}")(np.asarray(values, float), self.idx)
@@ -154,6 +158,7 @@ class GenesisSim(GenesisScene):
         return out
 
     def close(self):
+        self.scene.destroy()
         self.scene = self.entity = self.mujoco = None
 
 
@@ -234,6 +239,11 @@ def run_case(case, seed, out):
                               lambda engine_mech: GenesisSim(engine_mech, case.effects))
 
 
-if __name__ == "__main__":
+def init():
+    """Genesis on its CPU backend in float64, seeded (both suites)."""
     genesis.init(backend=genesis.cpu, precision="64", logging_level="warning", seed=0)
+
+
+if __name__ == "__main__":
+    init()
     gs.engine_suite_main(cases, run_case)

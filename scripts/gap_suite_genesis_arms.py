@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Multi-joint arm recordings made by Genesis (genesis-world, its rigid solver on the CPU backend, float64), an
 eleventh engine held out from `partscene gap`'s development: the KUKA LBR iiwa 7 R800 and the Franka Panda that
-ship with pybullet_data (another project's models), prepared exactly as gap_suite_bullet_arms.py prepares them,
+ship with pybullet_data (another project's models), prepared exactly as gap_suite_drake_arms.py prepares them,
 driven by torques for 20 s at 200 Hz. The same case format as gap_suite.py, cases named genesis_iiwa_* and
 genesis_panda_*.
 
@@ -16,10 +16,12 @@ links made explicit as gap_suite_bullet_arms.massless_made_explicit does) loaded
 (gs.morphs.URDF, fixed=True: the root link welded to the world) into a scene of its own (1 ms steps, one substep,
 gravity -9.81 z, collisions off, Genesis's default integrator and constraint solver, joint limits on as Genesis
 has them). Efforts are generalized forces set by control_dofs_force at each sample and held between samples.
-What Genesis adds that URDF cannot say: its importer gives every joint a rotor inertia (dofs_armature 0.1 kg m^2
-in genesis-world 1.4): the cases set each joint's armature to what the case conceals (zero where none), except
-genesis_panda_default_armature, which keeps what the importer gave, read back from the engine (the first thing a
-user of Genesis who loads a URDF meets). The identified-model cases write model.urdf with every link's mass and
+What Genesis adds that URDF cannot say: its URDF morph fills in a rotor inertia at build for every one-dof joint
+left at zero (default_armature, 0.1 kg m^2 in genesis-world 1.4): the cases set each joint's armature to what the
+case conceals (zero where none), except genesis_panda_default_armature, which keeps what Genesis gave, read back from
+the engine (the first thing a user of Genesis who loads a URDF meets); and the bound its importer puts on each
+joint's applied force (the URDF's <limit effort>: 12 N m on the Panda's wrist) is lifted
+(gap_suite_genesis.GenesisScene). The identified-model cases write model.urdf with every link's mass and
 inertia tensor scaled alike by a factor drawn within +-5 % (gap_suite_bullet_arms.identified), the engine keeping
 the shipped values.
 
@@ -46,7 +48,6 @@ joint's RMS effort on efforts.
 from dataclasses import dataclass, field
 from importlib import metadata
 
-import genesis
 import mujoco
 import numpy as np
 
@@ -55,7 +56,7 @@ import gap_suite_bullet_arms as bullet
 import gap_suite_genesis as genesis_suite
 from gap_suite import DT, SuiteError
 
-ENGINE = f"genesis {metadata.version('genesis-world')}"
+ENGINE = genesis_suite.ENGINE
 CHECK_RTOL = 1e-8
 FRICTION_CHECK_SPEED = 1.0  # rad/s: where a friction-loss row gives its whole level (checked)
 
@@ -85,16 +86,13 @@ class ArmCase(bullet.ArmCase):
         return self.effects_with(self.armature or [0.0] * 7)
 
 
-IIWA_ROTOR = [0.3, 0.3, 0.1, 0.1, 0.02, 0.02, 0.005]
-
-
 def cases():
     return [
         ArmCase("genesis_iiwa_none", "iiwa; nothing missing (Genesis's armature set to zero)", "iiwa"),
         ArmCase("genesis_iiwa_friction", "iiwa; dry friction (friction loss) on every joint", "iiwa",
                 friction=bullet.FRICTION),
         ArmCase("genesis_iiwa_rotor_damping", "iiwa; rotor inertia on every joint, damping on joints 2, 4, 6", "iiwa",
-                damping=[0.0, 1.0, 0.0, 0.3, 0.0, 0.004, 0.0], armature=IIWA_ROTOR),
+                damping=[0.0, 1.0, 0.0, 0.3, 0.0, 0.004, 0.0], armature=bullet.IIWA_ROTOR),
         ArmCase("genesis_iiwa_identified_model", "iiwa; dry friction on every joint, sensor biases on joints 2 and 4, "
                 "model.urdf's inertias up to 5 % off", "iiwa", friction=bullet.FRICTION,
                 offset=[0.0, 1.0, 0.0, -0.5, 0.0, 0.0, 0.0], model_error=0.05),
@@ -193,13 +191,14 @@ def run_case(case, seed, out):
                             "bounded by the level",
         "viscous_damping": "set_dofs_damping, in the integrator's implicit part",
         "armature": "set_dofs_armature: added to the joint-space inertia's diagonal" + (
-            " (what Genesis's URDF importer gives every joint, read back)" if case.armature is None else ""),
+            " (what Genesis's URDF morph fills in for every joint, default_armature, read back)"
+            if case.armature is None else ""),
         "effort_offset": "minus the bias added to the recorded effort (a torque sensor's): the joint felt the recorded "
                          "effort + offset",
     }
     engine_detail = (f"{ENGINE} (torch {metadata.version('torch')}), CPU backend, float64, {note}; Genesis's URDF "
-                     f"importer, root welded, {DT} s steps, one substep, collisions off, default integrator and "
-                     "constraint solver, efforts through control_dofs_force, held between samples; one step's "
+                     f"importer, root welded, {DT} s steps, one substep, collisions off, default integrator "
+                     "(approximate_implicitfast) and constraint solver, the force bound lifted, efforts through control_dofs_force, held between samples; one step's "
                      f"rigid bodies checked against MuJoCo's reading of the same URDF to {CHECK_RTOL:g}")
     shown = ArmCase(**{**case.__dict__, "armature": [float(a) for a in armature]})
     truth = bullet.arm_truth(ENGINE, shown, seed, (detail, engine_detail), traj, effort_sigma, model_effort)
@@ -208,5 +207,5 @@ def run_case(case, seed, out):
 
 
 if __name__ == "__main__":
-    genesis.init(backend=genesis.cpu, precision="64", logging_level="warning", seed=0)
+    genesis_suite.init()
     gs.engine_suite_main(cases, run_case)
