@@ -99,6 +99,35 @@ class ArmCase:
         return out + [Effect(n, "viscous_damping", {"damping": float(b)}) for n, b in zip(joints, self.damping) if b > 0]
 
 
+@dataclass
+class RotorArmCase(ArmCase):
+    """An arm case whose engine also has, per joint (in the robot's order), armature (reflected rotor inertia,
+    kg m^2) and offset (the torque sensor's bias, N m): the Drake and Genesis arm suites'. Each says how its engine's
+    friction level is parametrised (friction_params)."""
+
+    armature: list = field(default_factory=lambda: [0.0] * 7)
+    offset: list = field(default_factory=lambda: [0.0] * 7)
+
+    def friction_params(self, level):
+        """truth.json's parameters of a friction of `level` (N m)."""
+        return {"friction": float(level)}
+
+    @property
+    def effects(self):
+        """The concealed effects, as truth.json names them."""
+        joints = ROBOTS[self.robot].joints
+        kinds = (("coulomb_friction", self.friction, self.friction_params),
+                 ("viscous_damping", self.damping, lambda b: {"damping": float(b)}),
+                 ("armature", self.armature, lambda a: {"armature": float(a)}),
+                 # The spec's offset adds to the recorded effort to give the felt one: minus the bias.
+                 ("effort_offset", self.offset, lambda o: {"offset": -float(o)}))
+        return [Effect(n, kind, params(v)) for kind, values, params in kinds for n, v in zip(joints, values) if v]
+
+
+# How a sensor bias (RotorArmCase.offset) is made, in truth.json.
+OFFSET_DETAIL = "minus the bias added to the recorded effort (a torque sensor's): the joint felt the recorded effort + offset"
+
+
 FRICTION = [2.0, 2.0, 0.8, 0.8, 0.03, 0.02, 0.003]
 PANDA_FRICTION = [1.0, 1.0, 0.8, 0.8, 0.3, 0.2, 0.05]
 # Rotor inertia as a geared iiwa has it (the Drake and Genesis arm suites): a sizeable share of each joint's own

@@ -50,7 +50,7 @@ inertia sized so that each is material (truth.json's visibility_effort_share has
 """
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from importlib import metadata
 
 import mujoco
@@ -71,25 +71,14 @@ CHECK_RTOL = 1e-9
 
 
 @dataclass
-class ArmCase(bullet.ArmCase):
-    """The Bullet suite's arm case, with per joint (in the robot's order) also armature (reflected rotor inertia,
-    kg m^2) and offset (the torque sensor's bias, N m); friction is a DoorHinge's dynamic friction (N m), smooth
-    over TRANSITION_SPEED."""
+class ArmCase(bullet.RotorArmCase):
+    """The arm case with rotors and sensor biases (gap_suite_bullet_arms.RotorArmCase); friction is a DoorHinge's
+    dynamic friction (N m), smooth over TRANSITION_SPEED."""
 
-    armature: list = field(default_factory=lambda: [0.0] * 7)
-    offset: list = field(default_factory=lambda: [0.0] * 7)
     engine: str = "drake"
 
-    @property
-    def effects(self):
-        """The concealed effects, as truth.json names them (gap_suite_bullet_arms.Effect)."""
-        joints = bullet.ROBOTS[self.robot].joints
-        kinds = (("coulomb_friction", self.friction, lambda f: {"friction": float(f), "transition_speed": TRANSITION_SPEED}),
-                 ("viscous_damping", self.damping, lambda b: {"damping": float(b)}),
-                 ("armature", self.armature, lambda a: {"armature": float(a)}),
-                 # The spec's offset adds to the recorded effort to give the felt one: minus the bias.
-                 ("effort_offset", self.offset, lambda o: {"offset": -float(o)}))
-        return [bullet.Effect(n, kind, params(v)) for kind, values, params in kinds for n, v in zip(joints, values) if v]
+    def friction_params(self, level):
+        return {"friction": float(level), "transition_speed": TRANSITION_SPEED}
 
 
 IIWA_FRICTION = bullet.FRICTION
@@ -247,8 +236,7 @@ def run_case(case, seed, out):
         "viscous_damping": "Joint.set_default_damping, implicit in SAP's step",
         "armature": f"JointActuator rotor inertia armature / {GEAR_RATIO:g}^2 behind a {GEAR_RATIO:g}:1 gear (reflected "
                     "inertia), actuation input zero",
-        "effort_offset": "minus the bias added to the recorded effort (a torque sensor's): the joint felt the recorded "
-                         "effort + offset",
+        "effort_offset": bullet.OFFSET_DETAIL,
         "gravity_tilt": f"the plant's gravity field {tuple(round(g, 6) for g in gravity)}: the whole robot stands tilted",
     }
     engine_detail = (f"{ENGINE}, {note}; discrete MultibodyPlant (SAP, kLagged), root welded, {DT} s steps "

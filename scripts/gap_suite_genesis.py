@@ -50,6 +50,7 @@ import tempfile
 from importlib import metadata
 
 import genesis
+import mujoco
 import numpy as np
 
 import gap_suite as gs
@@ -67,7 +68,7 @@ FREE = 1e9  # a joint range that never binds, while one step is measured
 class GenesisScene:
     """URDF `text` read by Genesis's importer into a scene of its own (root link welded to the world, collisions off,
     DT steps, one substep, `gravity`), its joints `names` (in order); efforts through control_dofs_force, held
-    between steps."""
+    between steps; beside it, MuJoCo's reading of the same text (dynamics)."""
 
     def __init__(self, text, names, gravity=GRAVITY):
         with tempfile.TemporaryDirectory() as folder:
@@ -85,6 +86,7 @@ class GenesisScene:
             raise SuiteError(f"Genesis made {self.entity.n_dofs} degrees of freedom of a model of {len(self.names)} "
                              "joints")
         self.idx = [self.entity.get_joint(name).dofs_idx_local[0] for name in self.names]
+        self.mujoco = gs.MujocoSim(mujoco.MjSpec.from_string(text).compile(), self.names)
         # The importer bounds each joint's applied force by the URDF's <limit effort> (the Panda's wrist: 12 N m),
         # silently: the recording's efforts must be the ones the engine applied, so the bound is lifted.
         unbounded = np.full(len(self.names), np.inf)
@@ -108,6 +110,11 @@ class GenesisScene:
         for _ in range(int(steps)):
             self.scene.step()
 
+    def dynamics(self, q, qd):
+        """Joint-space inertia and bias force as MuJoCo reads the same URDF: what a Genesis step is checked against,
+        and the size of gap_suite.probe_step_dynamics's probes (every check measures Genesis through its steps)."""
+        return self.mujoco.dynamics(q, qd)
+
 
 class GenesisSim(GenesisScene):
     """The engine's bodies (`mech`) written as URDF and read by Genesis's importer into a scene of its own, the
@@ -123,7 +130,6 @@ class GenesisSim(GenesisScene):
         self._set("damping", [mech.joint(name).damping + p["damping"] for p, name in zip(params, self.names)])
         self._set("armature", [p["armature"] for p in params])
         self.limits = [np.asarray(x, float).copy() for x in self.entity.get_dofs_limit(self.idx)]
-        self.mujoco = gs.MujocoSim(gs.mujoco_model(mech, []), self.names)
 
     def _set(self, what, values):
         getattr(self.entity, f"set_dofs_{what}")(np.asarray(values, float), self.idx)
@@ -134,11 +140,6 @@ class GenesisSim(GenesisScene):
     def pose(self, link):
         body = self.entity.get_link(link)
         return np.concatenate([np.asarray(body.get_pos(), float), np.asarray(body.get_quat(), float)])  # w x y z
-
-    def dynamics(self, q, qd):
-        """MuJoCo's reading of the engine's bodies: the size of step_dynamics's probes only (every check measures
-        Genesis through its steps)."""
-        return self.mujoco.dynamics(q, qd)
 
     def step_dynamics(self, q, qd):
         """Joint-space inertia and bias force as one Genesis step has them, with everything the step adds (implicit

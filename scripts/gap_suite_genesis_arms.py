@@ -45,7 +45,8 @@ Excitation: gap_suite.arm_excitation, the MuJoCo, Bullet and Drake arm suites': 
 200 Hz and held; the controller knows none of the concealed effects. Noise: 1e-4 rad on positions, 1 % of each
 joint's RMS effort on efforts.
 """
-from dataclasses import dataclass, field
+import dataclasses
+from dataclasses import dataclass
 from importlib import metadata
 
 import mujoco
@@ -62,28 +63,12 @@ FRICTION_CHECK_SPEED = 1.0  # rad/s: where a friction-loss row gives its whole l
 
 
 @dataclass
-class ArmCase(bullet.ArmCase):
-    """The Bullet suite's arm case, with per joint (in the robot's order) also armature (kg m^2; None: what Genesis's
-    importer gives, read back) and offset (the torque sensor's bias, N m); friction is a friction-loss level (N m)."""
+class ArmCase(bullet.RotorArmCase):
+    """The arm case with rotors and sensor biases (gap_suite_bullet_arms.RotorArmCase); friction is a friction-loss
+    level (N m). With imported_armature, the armature is what Genesis fills in (read back), not `armature`."""
 
-    armature: list | None = field(default_factory=lambda: [0.0] * 7)
-    offset: list = field(default_factory=lambda: [0.0] * 7)
+    imported_armature: bool = False
     engine: str = "genesis"
-
-    def effects_with(self, armature):
-        """The concealed effects, as truth.json names them (gap_suite_bullet_arms.Effect), with the armature the
-        engine has."""
-        joints = bullet.ROBOTS[self.robot].joints
-        kinds = (("coulomb_friction", self.friction, lambda f: {"friction": float(f)}),
-                 ("viscous_damping", self.damping, lambda b: {"damping": float(b)}),
-                 ("armature", armature, lambda a: {"armature": float(a)}),
-                 # The spec's offset adds to the recorded effort to give the felt one: minus the bias.
-                 ("effort_offset", self.offset, lambda o: {"offset": -float(o)}))
-        return [bullet.Effect(n, kind, params(v)) for kind, values, params in kinds for n, v in zip(joints, values) if v]
-
-    @property
-    def effects(self):
-        return self.effects_with(self.armature or [0.0] * 7)
 
 
 def cases():
@@ -98,7 +83,7 @@ def cases():
                 offset=[0.0, 1.0, 0.0, -0.5, 0.0, 0.0, 0.0], model_error=0.05),
         ArmCase("genesis_panda_none", "Panda; nothing missing (Genesis's armature set to zero)", "panda"),
         ArmCase("genesis_panda_default_armature", "Panda as Genesis's URDF importer loads it: the rotor inertia it "
-                "gives every joint, nothing else", "panda", armature=None),
+                "gives every joint, nothing else", "panda", imported_armature=True),
         ArmCase("genesis_panda_friction_damping", "Panda; dry friction on joints 1, 3, 5, 7, damping on 2 and 4",
                 "panda", friction=[1.0, 0.0, 0.8, 0.0, 0.3, 0.0, 0.05], damping=[0.0, 1.0, 0.0, 0.5, 0.0, 0.0, 0.0]),
         ArmCase("genesis_panda_identified_model", "Panda; dry friction on every joint, model.urdf's inertias up to "
@@ -125,35 +110,19 @@ class GenesisArm(genesis_suite.GenesisScene):
         """Nothing: the scene is kept for the robot's next case (arm_of), its effects set again there."""
 
 
-class Probed:
-    """A GenesisArm seen through one step (gap_suite.probe_step_dynamics needs sim.dynamics only for the size of its
-    probes: MuJoCo's reading of the same text gives it)."""
-
-    def __init__(self, arm, mj):
-        self.arm, self.mj, self.names = arm, mj, arm.names
-
-    def __getattr__(self, name):
-        return getattr(self.arm, name)
-
-    def dynamics(self, q, qd):
-        return self.mj.dynamics(q, qd)
-
-
-def check_engine(arm, text, case, armature, rng):
-    """The step's rigid bodies with every effect zeroed against MuJoCo's reading of `text`, then the case's effects
+def check_engine(arm, case, armature, rng):
+    """The step's rigid bodies with every effect zeroed against MuJoCo's reading of the arm's URDF, then the case's effects
     against that (module docstring), at 5 random states at FRICTION_CHECK_SPEED."""
     n = len(arm.names)
-    mj = gs.MujocoSim(mujoco.MjSpec.from_string(text).compile(), arm.names)
-    probed = Probed(arm, mj)
     friction, damping = np.asarray(case.friction, float), np.asarray(case.damping, float)
     for _ in range(5):
         q = rng.uniform(arm.lo + 0.1, arm.hi - 0.1)
         qd = FRICTION_CHECK_SPEED * rng.choice([-1.0, 1.0], n)
         arm.set_effects(np.zeros(n), np.zeros(n), np.zeros(n))
-        bare = gs.probe_step_dynamics(probed, q, qd, 1.0)
-        gs.compare_dynamics("Genesis arm against MuJoCo", bare, mj.dynamics(q, qd), CHECK_RTOL)
+        bare = gs.probe_step_dynamics(arm, q, qd, 1.0)
+        gs.compare_dynamics("Genesis arm against MuJoCo", bare, arm.dynamics(q, qd), CHECK_RTOL)
         arm.set_effects(friction, damping, armature)
-        full, bias = gs.probe_step_dynamics(probed, q, qd, 1.0)
+        full, bias = gs.probe_step_dynamics(arm, q, qd, 1.0)
         want = (bare[0] + np.diag(armature + DT * damping), bare[1] + damping * qd + friction * np.sign(qd))
         scale = max(1.0, np.abs(want[0]).max(), np.abs(want[1]).max())
         if max(np.abs(full - want[0]).max(), np.abs(bias - want[1]).max()) > CHECK_RTOL * scale:
@@ -178,8 +147,8 @@ def run_case(case, seed, out):
     joints = robot.joints
     engine_text = bullet.massless_made_explicit(bullet.shipped_urdf(robot))
     arm = arm_of(robot, engine_text)
-    armature = arm.imported_armature.copy() if case.armature is None else np.asarray(case.armature, float)
-    check_engine(arm, engine_text, case, armature, rng)
+    armature = arm.imported_armature.copy() if case.imported_armature else np.asarray(case.armature, float)
+    check_engine(arm, case, armature, rng)
     model_text = bullet.identified(engine_text, case.model_error, rng) if case.model_error > 0 else engine_text
     nominal = gs.MujocoSim(mujoco.MjSpec.from_string(model_text).compile(), joints)
     arm.set_effects(case.friction, case.damping, armature)
@@ -192,15 +161,15 @@ def run_case(case, seed, out):
         "viscous_damping": "set_dofs_damping, in the integrator's implicit part",
         "armature": "set_dofs_armature: added to the joint-space inertia's diagonal" + (
             " (what Genesis's URDF morph fills in for every joint, default_armature, read back)"
-            if case.armature is None else ""),
-        "effort_offset": "minus the bias added to the recorded effort (a torque sensor's): the joint felt the recorded "
-                         "effort + offset",
+            if case.imported_armature else ""),
+        "effort_offset": bullet.OFFSET_DETAIL,
     }
     engine_detail = (f"{ENGINE} (torch {metadata.version('torch')}), CPU backend, float64, {note}; Genesis's URDF "
                      f"importer, root welded, {DT} s steps, one substep, collisions off, default integrator "
-                     "(approximate_implicitfast) and constraint solver, the force bound lifted, efforts through control_dofs_force, held between samples; one step's "
-                     f"rigid bodies checked against MuJoCo's reading of the same URDF to {CHECK_RTOL:g}")
-    shown = ArmCase(**{**case.__dict__, "armature": [float(a) for a in armature]})
+                     "(approximate_implicitfast) and constraint solver, the force bound lifted, efforts through "
+                     "control_dofs_force, held between samples; one step's rigid bodies checked against MuJoCo's "
+                     f"reading of the same URDF to {CHECK_RTOL:g}")
+    shown = dataclasses.replace(case, armature=[float(a) for a in armature])
     truth = bullet.arm_truth(ENGINE, shown, seed, (detail, engine_detail), traj, effort_sigma, model_effort)
     bullet.write_arm_case(out, case, (model_text, note), table, truth)
     return gs.summary_line(shown, traj, truth)
