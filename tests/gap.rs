@@ -194,6 +194,83 @@ fn mass_scale() {
     );
 }
 
+/// A lid hinged along its back edge, closed at 0 and opening past upright to 1.9 rad (its weight
+/// holds it open there, as it holds it shut at 0).
+const LID: &str = r#"<robot name="chest"><link name="box"/>
+  <link name="lid"><inertial><origin xyz="0.2 0 0.01"/><mass value="1.5"/>
+    <inertia ixx="0.0313" iyy="0.02005" izz="0.05125" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="lid_hinge" type="revolute"><parent link="box"/><child link="lid"/><axis xyz="0 -1 0"/>
+    <limit lower="0" upper="1.9" effort="1000" velocity="100"/></joint>
+</robot>"#;
+
+/// [`LID`] `scale` × as heavy (inertia and weight) with viscous damping `damping` N·m·s/rad,
+/// released at 0.6 rad, then pushed by a hand toward random openings a little past either stop
+/// (a PD holding the modelled weight, effort within ±4.5 N·m, decided every 0.1 s and held) for
+/// 0.6–1.2 s at a time, let go for 0.5–1.0 s in between: it falls shut or open onto its stops
+/// (inelastic) and rests there.
+/// RK4 at 1 ms, logged at 200 Hz with 0.7 mrad of encoder noise, seeded.
+fn lid_csv(scale: f64, damping: f64, seed: u64) -> String {
+    let (mass, lever, rise, inertia_com) = (1.5, 0.2, 0.01, 0.02005);
+    let inertia = inertia_com + mass * (lever * lever + rise * rise);
+    // The effort that holds the modelled lid still at q (its centre of mass at height
+    // lever·sin q + rise·cos q).
+    let weight = |q: f64| mass * 9.81 * (lever * q.cos() - rise * q.sin());
+    let accel = |q: f64, v: f64, u: f64| (u - scale * weight(q) - damping * v) / (scale * inertia);
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let (mut q, mut v, mut u) = (0.6_f64, 0.0_f64, 0.0);
+    let (mut pushing, mut phase_end, mut target) = (false, 0.3, 0.6);
+    let mut csv = String::from("time,lid_hinge.q,lid_hinge.effort\n");
+    for step in 0..8000 {
+        let t = f64::from(step) * 1e-3;
+        if step % 100 == 0 {
+            if t >= phase_end {
+                pushing = !pushing;
+                phase_end = t + if pushing { rng.random_range(0.6..1.2) } else { rng.random_range(0.5..1.0) };
+                target = rng.random_range(-0.2..2.1);
+            }
+            u = if pushing { (8.0 * (target - q) - 1.5 * v + weight(q)).clamp(-4.5, 4.5) } else { 0.0 };
+        }
+        if step % 5 == 0 {
+            let noise: f64 = rng.random_range(-1.0..1.0) * 0.0007 * 3.0_f64.sqrt();
+            writeln!(csv, "{t:.3},{:.6},{u:.6}", q + noise).expect("writes to a string");
+        }
+        let h = 1e-3;
+        let (k1q, k1v) = (v, accel(q, v, u));
+        let (k2q, k2v) = (v + 0.5 * h * k1v, accel(q + 0.5 * h * k1q, v + 0.5 * h * k1v, u));
+        let (k3q, k3v) = (v + 0.5 * h * k2v, accel(q + 0.5 * h * k2q, v + 0.5 * h * k2v, u));
+        let (k4q, k4v) = (v + h * k3v, accel(q + h * k3q, v + h * k3v, u));
+        q += h / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
+        v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+        // The stops: the lid lands and stays (until pushed off).
+        if q <= 0.0 || q >= 1.9 {
+            q = q.clamp(0.0, 1.9);
+            v = 0.0;
+        }
+    }
+    csv
+}
+
+#[test]
+fn a_heavier_lid_with_a_damped_hinge_is_named_both_though_neither_passes_alone() {
+    // Regression (Genesis's lid at seed 4, JAX-sim's lids: nothing named, `unknown` at 70 % of
+    // the effort): the model's first moments take the heavier lid's weight, so alone it reads as
+    // inertia and the damping alone is fitted too strong; each failed the held-out blocks without
+    // the other. At these seeds the release before named dry friction or a soft-close and
+    // `unknown` instead (36 of 40 seeds were right; 39 now).
+    let model = parse_model(LID, Path::new("chest.urdf")).expect("model parses");
+    for seed in [14, 27, 38] {
+        let rec = parse_recording(&lid_csv(1.3, 0.2, seed), Path::new("lid.csv")).expect("parses");
+        let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
+        let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
+        eprintln!("FIGURES heavier_damped_lid seed {seed} | found {found:?} | {:?}", report.joints["lid_hinge"].rejected);
+        assert_eq!(report.effects.len(), 2, "seed {seed}: {found:?}");
+        for (kind, param, truth) in [("mass_scale", "scale", 1.3), ("viscous_damping", "damping", 0.2)] {
+            let e = report.effects.iter().find(|e| e.kind == kind).unwrap_or_else(|| panic!("seed {seed}: no {kind}: {found:?}"));
+            assert!((e.params[param] - truth).abs() <= 0.1 * truth, "seed {seed}: {found:?}");
+        }
+    }
+}
+
 #[test]
 fn a_heavier_drawer_is_armature_for_its_weight_does_no_work() {
     // The spec: inertia alone, without weight, is armature; a horizontal drawer's weight does no

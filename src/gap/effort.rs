@@ -13,7 +13,7 @@
 //! error) stays unnamed. What remains material after the best model is reported once per joint
 //! as `unknown`, with its size in effort units.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
@@ -880,12 +880,20 @@ pub struct RestsLeftOut {
     pub share: f64,
 }
 
-/// The candidates that passed in one forward step and their gains, in candidate order, with the
-/// bans they were weighed under ([`EffortProblem::best_step`]).
+/// The candidates weighed in one forward step, in candidate order, each with its held-out gain
+/// and whether it passed, with the bans they were weighed under ([`EffortProblem::best_step`]).
 #[derive(Debug)]
 struct WeighedStep {
     banned: Vec<bool>,
-    passing: Vec<(usize, f64)>,
+    weighed: Vec<Weighed>,
+}
+
+/// One candidate weighed as a forward step ([`WeighedStep`]).
+#[derive(Debug, Clone, Copy)]
+struct Weighed {
+    candidate: usize,
+    gain: f64,
+    passes: bool,
 }
 
 /// A forward step: the chosen set it starts from, and whether it weighs whole refinements.
@@ -2269,14 +2277,6 @@ impl EffortProblem<'_> {
         }
     }
 
-    /// Whether `after` (with candidate c) cuts the held-out error of `before` on the rows `rows`
-    /// as [`Self::passes`] asks: what a verdict needs first (a term's size is measured over the
-    /// samples only for a candidate that passes this).
-    fn cuts_held_out(&self, before: &Evaluation, after: &Evaluation, rows: &[usize], c: usize) -> bool {
-        let (gain, fold_share) = self.held_out_cut(before, after, rows, c);
-        self.cut_passes(gain, fold_share)
-    }
-
     /// Whether a held-out cut of `gain` shared by `fold_share` of the folds is enough to enter.
     fn cut_passes(&self, gain: f64, fold_share: f64) -> bool {
         gain >= self.rules.min_cv_gain && fold_share >= self.rules.min_fold_share
@@ -2772,11 +2772,104 @@ impl EffortProblem<'_> {
             // differs by direction on a joint that moves one way for long spells is two
             // levels that neither a symmetric law nor an offset matches alone: each is better
             // in only half of the held-out blocks.
-            let step = self.best_step(chosen, current, banned, false).or_else(|| self.best_step(chosen, current, banned, true));
-            let Some((c, e)) = step else { return };
-            *chosen = self.with(chosen, c);
+            // Where no term passes alone, two may pass together (below).
+            let step = self
+                .best_step(chosen, current, banned, false)
+                .or_else(|| self.best_step(chosen, current, banned, true))
+                .map(|(c, e)| (self.with(chosen, c), e))
+                .or_else(|| self.best_pair(chosen, current, banned));
+            let Some((set, e)) = step else { return };
+            *chosen = set;
             *current = e;
         }
+    }
+
+    /// Two terms of one joint that pass only together, where no term passes alone: each biases
+    /// the other's fit while it is missing (omitted-variable bias; Miller, *Subset Selection in
+    /// Regression*, §3.2, on forward selection missing a pair that explains together). A lid
+    /// heavier than modelled with a damped hinge: the model's own first moments take the
+    /// heavier part's weight, so alone it reads as inertia and its fit bends to the damping's
+    /// effort it lacks; alone, the damping is fitted half again too strong and fails where the
+    /// lid is pushed hardest; together both come out right and explain nearly all the effort.
+    ///
+    /// A pair is led by a term that cuts the held-out error on its own ([`Self::cut_passes`]'s
+    /// gain) but not in enough blocks or not materially; its partner is another family's best
+    /// single step on the same joint, of a family the joint does not have yet. The pair must cut
+    /// the held-out error as a step must, and each member must pass against the set with the
+    /// other (the test [`Self::prune`] applies), so neither is carried by its partner. On a joint
+    /// that has terms already, a pair enters only in place of one of them, that fails beside it
+    /// (what stood in for the two: dry friction for a heavier, damped lid), as sequential
+    /// replacement swaps one term for one ([`Self::replace`]); beside terms that still hold, later
+    /// terms enter one by one. The best pair by its cut enters: the new set and its evaluation.
+    fn best_pair(&self, chosen: &[usize], current: &Evaluation, banned: &[bool]) -> Option<(Vec<usize>, Evaluation)> {
+        let weighed: Vec<Weighed> = self.steps.lock().ok()?.get(&(chosen.to_vec(), false))?.weighed.clone();
+        let has_family =
+            |row: usize, family: Family| chosen.iter().any(|&x| self.candidates[x].row == row && self.candidates[x].family == family);
+        // Each family's best single step per row (its other laws fare alike beside a partner).
+        let mut best_of: BTreeMap<(usize, Family), Weighed> = BTreeMap::new();
+        for w in weighed.iter().filter(|w| !banned[w.candidate]) {
+            let cand = &self.candidates[w.candidate];
+            if cand.is_refinement() || has_family(cand.row, cand.family) {
+                continue;
+            }
+            let slot = best_of.entry((cand.row, cand.family)).or_insert(*w);
+            if w.gain > slot.gain * 1.001 + 1e-12 {
+                *slot = *w;
+            }
+        }
+        let pairs: BTreeSet<(usize, usize)> = best_of
+            .iter()
+            .filter(|(_, lead)| lead.gain >= self.rules.min_cv_gain)
+            .flat_map(|(&(row, family), lead)| {
+                best_of
+                    .iter()
+                    .filter(move |((r, f), other)| *r == row && *f != family && (other.gain < self.rules.min_cv_gain || *f > family))
+                    .map(move |(_, other)| (lead.candidate.min(other.candidate), lead.candidate.max(other.candidate)))
+            })
+            .collect();
+        let passing: Vec<(Vec<usize>, f64)> =
+            pairs.into_iter().collect::<Vec<_>>().into_par_iter().filter_map(|(a, b)| self.pair_step(chosen, current, a, b)).collect();
+        let mut best: Option<(Vec<usize>, f64)> = None;
+        for (set, gain) in passing {
+            if best.as_ref().is_none_or(|(_, best_gain)| gain > best_gain * 1.001 + 1e-12) {
+                best = Some((set, gain));
+            }
+        }
+        best.map(|(set, _)| {
+            let e = self.evaluate(&set);
+            (set, e)
+        })
+    }
+
+    /// The set [`Self::best_pair`] reaches from `chosen` with candidates a and b, and the pair's
+    /// held-out cut, where the pair passes.
+    fn pair_step(&self, chosen: &[usize], current: &Evaluation, a: usize, b: usize) -> Option<(Vec<usize>, f64)> {
+        let rows = rows_of_both(&self.rows_of(a), &self.rows_of(b));
+        let with_pair = self.with(&self.with(chosen, a), b);
+        let e = self.evaluate(&with_pair);
+        let each_passes = |base: &[usize], e: &Evaluation| {
+            [(a, b), (b, a)].into_iter().all(|(x, partner)| {
+                let v = self.verdict(&self.evaluate(&self.with(base, partner)), e, &self.rows_of(x), x, None);
+                self.passes(&v)
+            })
+        };
+        // The pair's terms act where the joint rests unless both follow its motion.
+        let judged_as = if self.candidates[a].family.follows_motion() { b } else { a };
+        let on_rows: Vec<usize> = chosen.iter().copied().filter(|&x| rows.contains(&self.candidates[x].row)).collect();
+        if on_rows.is_empty() {
+            let (gain, fold_share) = self.held_out_cut(current, &e, &rows, judged_as);
+            return (self.cut_passes(gain, fold_share) && each_passes(chosen, &e)).then_some((with_pair, gain));
+        }
+        // In place of the first of the joint's terms that fails beside the pair.
+        let displaced = on_rows.into_iter().find(|&x| {
+            let rest: Vec<usize> = with_pair.iter().copied().filter(|&y| y != x).collect();
+            !self.passes(&self.verdict(&self.evaluate(&rest), &e, &self.rows_of(x), x, None))
+        })?;
+        let base: Vec<usize> = chosen.iter().copied().filter(|&y| y != displaced).collect();
+        let set = self.with(&self.with(&base, a), b);
+        let e = self.evaluate(&set);
+        let (gain, fold_share) = self.held_out_cut(current, &e, &rows, judged_as);
+        (self.cut_passes(gain, fold_share) && each_passes(&base, &e) && e.total_sse() <= current.total_sse()).then_some((set, gain))
     }
 
     /// The candidate not `banned` that passes and cuts the held-out error most against
@@ -2792,20 +2885,20 @@ impl EffortProblem<'_> {
     fn best_step(&self, chosen: &[usize], current: &Evaluation, banned: &[bool], whole_refinements: bool) -> Option<(usize, Evaluation)> {
         let key = (chosen.to_vec(), whole_refinements);
         let weighed = self.steps.lock().ok().and_then(|steps| steps.get(&key).cloned());
-        let passing: Vec<(usize, f64)> = match weighed {
+        let weighed: Vec<Weighed> = match weighed {
             Some(w) if w.banned.iter().zip(banned).all(|(&then, &now)| now || !then) => {
-                w.passing.iter().copied().filter(|&(c, _)| !banned[c]).collect()
+                w.weighed.iter().copied().filter(|w| !banned[w.candidate]).collect()
             }
             _ => {
-                let passing = self.passing_steps(chosen, current, banned, whole_refinements);
+                let weighed = self.weigh_steps(chosen, current, banned, whole_refinements);
                 if let Ok(mut steps) = self.steps.lock() {
-                    steps.insert(key, Arc::new(WeighedStep { banned: banned.to_vec(), passing: passing.clone() }));
+                    steps.insert(key, Arc::new(WeighedStep { banned: banned.to_vec(), weighed: weighed.clone() }));
                 }
-                passing
+                weighed
             }
         };
         let mut best: Option<(usize, f64)> = None;
-        for (c, gain) in passing {
+        for Weighed { candidate: c, gain, .. } in weighed.into_iter().filter(|w| w.passes) {
             // Ties (look-alike kinds) go to the earlier candidate.
             if best.is_none_or(|(_, best_gain)| gain > best_gain * 1.001 + 1e-12) {
                 best = Some((c, gain));
@@ -2814,9 +2907,9 @@ impl EffortProblem<'_> {
         best.map(|(c, _)| (c, self.evaluate(&self.with(chosen, c))))
     }
 
-    /// The candidates not `banned` that may take the step of [`Self::best_step`] and pass, with
-    /// their gains, in candidate order.
-    fn passing_steps(&self, chosen: &[usize], current: &Evaluation, banned: &[bool], whole_refinements: bool) -> Vec<(usize, f64)> {
+    /// The candidates not `banned` that may take the step of [`Self::best_step`], each with its
+    /// gain and whether it passes, in candidate order.
+    fn weigh_steps(&self, chosen: &[usize], current: &Evaluation, banned: &[bool], whole_refinements: bool) -> Vec<Weighed> {
         // The candidates are weighed in parallel (each fit depends on its set alone; the caches
         // hold what the set's key determines), then taken in candidate order.
         (0..banned.len())
@@ -2831,16 +2924,18 @@ impl EffortProblem<'_> {
             .filter_map(|c| {
                 let rows = self.rows_of(c);
                 let e = self.evaluate_beside(&self.with(chosen, c), c, &rows);
-                if !self.cuts_held_out(current, &e, &rows, c) {
-                    return None;
+                let (gain, fold_share) = self.held_out_cut(current, &e, &rows, c);
+                let failed = Some(Weighed { candidate: c, gain, passes: false });
+                if !self.cut_passes(gain, fold_share) {
+                    return failed;
                 }
                 // Judged on its base joint, a base tilt still refits every joint it loads: it may
                 // not raise the held-out error summed over them all (as a swap may not, `replace`).
                 if self.candidates[c].is_base_tilt() && self.evaluate(&self.with(chosen, c)).total_sse() > current.total_sse() {
-                    return None;
+                    return failed;
                 }
                 let v = self.verdict(current, &e, &rows, c, self.family_member(chosen, c));
-                self.passes(&v).then_some((c, v.gain))
+                Some(Weighed { candidate: c, gain: v.gain, passes: self.passes(&v) })
             })
             .collect()
     }
