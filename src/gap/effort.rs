@@ -880,8 +880,10 @@ pub struct RestsLeftOut {
     pub share: f64,
 }
 
-/// The candidates weighed in one forward step, in candidate order, each with its held-out gain
-/// and whether it passed, with the bans they were weighed under ([`EffortProblem::best_step`]).
+/// The candidates weighed in one forward step (every one not banned, chosen or unresolved that
+/// may take it), in candidate order, each with its held-out gain and whether it passed, with the
+/// bans they were weighed under ([`EffortProblem::best_step`]; [`EffortProblem::best_pair`] reads
+/// the gains of a stalled step's single terms).
 #[derive(Debug)]
 struct WeighedStep {
     banned: Vec<bool>,
@@ -2792,15 +2794,19 @@ impl EffortProblem<'_> {
     /// effort it lacks; alone, the damping is fitted half again too strong and fails where the
     /// lid is pushed hardest; together both come out right and explain nearly all the effort.
     ///
-    /// A pair is led by a term that cuts the held-out error on its own ([`Self::cut_passes`]'s
-    /// gain) but not in enough blocks or not materially; its partner is another family's best
-    /// single step on the same joint, of a family the joint does not have yet. The pair must cut
-    /// the held-out error as a step must, and each member must pass against the set with the
-    /// other (the test [`Self::prune`] applies), so neither is carried by its partner. On a joint
-    /// that has terms already, a pair enters only in place of one of them, that fails beside it
-    /// (what stood in for the two: dry friction for a heavier, damped lid), as sequential
-    /// replacement swaps one term for one ([`Self::replace`]); beside terms that still hold, later
-    /// terms enter one by one. The best pair by its cut enters: the new set and its evaluation.
+    /// A pair is two families' best single steps on one joint (families the joint does not have
+    /// yet), at least one of them a law of the joint's own (friction, damping, a soft-close): two
+    /// terms shaped like the model's own rigid-body error (an offset and a tilt, a heavier part
+    /// and a spring) together fit what a 5 % weight error does, and on a vertical door they did.
+    /// Alone either may make the held-out error worse (`JaxSim`'s heavier, damped lid: each term
+    /// alone fails the block where the lid is pushed hardest, together they cut the error a
+    /// hundredfold). The pair must cut the held-out error as a step must, and each member must pass
+    /// against the set with the other (the test [`Self::prune`] applies), so neither is carried
+    /// by its partner. On a joint that has terms already, a pair enters only in place of one of
+    /// them, that fails beside it (what stood in for the two: dry friction for a heavier, damped
+    /// lid), as sequential replacement swaps one term for one ([`Self::replace`]); beside terms
+    /// that still hold, later terms enter one by one. The best pair by its cut enters: the new
+    /// set and its evaluation.
     fn best_pair(&self, chosen: &[usize], current: &Evaluation, banned: &[bool]) -> Option<(Vec<usize>, Evaluation)> {
         let weighed: Vec<Weighed> = self.steps.lock().ok()?.get(&(chosen.to_vec(), false))?.weighed.clone();
         let has_family =
@@ -2813,18 +2819,20 @@ impl EffortProblem<'_> {
                 continue;
             }
             let slot = best_of.entry((cand.row, cand.family)).or_insert(*w);
-            if w.gain > slot.gain * 1.001 + 1e-12 {
+            // Ties (look-alike laws) go to the earlier candidate, whatever the gain's sign.
+            if w.gain > slot.gain + 1e-3 * slot.gain.abs() + 1e-12 {
                 *slot = *w;
             }
         }
         let pairs: BTreeSet<(usize, usize)> = best_of
             .iter()
-            .filter(|(_, lead)| lead.gain >= self.rules.min_cv_gain)
-            .flat_map(|(&(row, family), lead)| {
+            .flat_map(|(&(row, family), first)| {
                 best_of
                     .iter()
-                    .filter(move |((r, f), other)| *r == row && *f != family && (other.gain < self.rules.min_cv_gain || *f > family))
-                    .map(move |(_, other)| (lead.candidate.min(other.candidate), lead.candidate.max(other.candidate)))
+                    .filter(move |((r, f), _)| {
+                        *r == row && *f > family && !(f.mimics_rigid_body_error() && family.mimics_rigid_body_error())
+                    })
+                    .map(move |(_, second)| (first.candidate.min(second.candidate), first.candidate.max(second.candidate)))
             })
             .collect();
         let passing: Vec<(Vec<usize>, f64)> =
@@ -2858,9 +2866,14 @@ impl EffortProblem<'_> {
         let on_rows: Vec<usize> = chosen.iter().copied().filter(|&x| rows.contains(&self.candidates[x].row)).collect();
         if on_rows.is_empty() {
             let (gain, fold_share) = self.held_out_cut(current, &e, &rows, judged_as);
-            return (self.cut_passes(gain, fold_share) && each_passes(chosen, &e)).then_some((with_pair, gain));
+            // A base tilt refits every joint it loads: the error summed over them may not rise
+            // (as for a single step, `weigh_steps`).
+            let tilt_holds = ![a, b].iter().any(|&x| self.candidates[x].is_base_tilt()) || e.total_sse() <= current.total_sse();
+            return (self.cut_passes(gain, fold_share) && tilt_holds && each_passes(chosen, &e)).then_some((with_pair, gain));
         }
-        // In place of the first of the joint's terms that fails beside the pair.
+        // In place of the first of the joint's terms (in the order they entered) that fails
+        // beside the pair, judged as a swap is (`replace`): over the rows of all three, and the
+        // error summed over every row may not rise.
         let displaced = on_rows.into_iter().find(|&x| {
             let rest: Vec<usize> = with_pair.iter().copied().filter(|&y| y != x).collect();
             !self.passes(&self.verdict(&self.evaluate(&rest), &e, &self.rows_of(x), x, None))
@@ -2868,7 +2881,8 @@ impl EffortProblem<'_> {
         let base: Vec<usize> = chosen.iter().copied().filter(|&y| y != displaced).collect();
         let set = self.with(&self.with(&base, a), b);
         let e = self.evaluate(&set);
-        let (gain, fold_share) = self.held_out_cut(current, &e, &rows, judged_as);
+        let swap_rows = rows_of_both(&rows, &self.rows_of(displaced));
+        let (gain, fold_share) = self.held_out_cut(current, &e, &swap_rows, judged_as);
         (self.cut_passes(gain, fold_share) && each_passes(&base, &e) && e.total_sse() <= current.total_sse()).then_some((set, gain))
     }
 
@@ -2879,8 +2893,8 @@ impl EffortProblem<'_> {
     /// `current` is the evaluation of `chosen` (as [`Self::forward`] and [`Self::prune`] keep
     /// it), so a step is determined by `chosen`, the kind of step and the bans. [`Self::select`]
     /// runs forward selection again with more bans, through the same sets until it departs from
-    /// the earlier run: a step weighed under fewer bans is not weighed again, its passing
-    /// candidates less the newly banned ones are what weighing them again would pass (each
+    /// the earlier run: a step weighed under fewer bans is not weighed again, its weighed
+    /// candidates less the newly banned ones are what weighing them again would give (each
     /// candidate's verdict depends on the set alone), and the tie-break runs over them afresh.
     fn best_step(&self, chosen: &[usize], current: &Evaluation, banned: &[bool], whole_refinements: bool) -> Option<(usize, Evaluation)> {
         let key = (chosen.to_vec(), whole_refinements);
