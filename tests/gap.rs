@@ -234,13 +234,7 @@ fn lid_csv(scale: f64, damping: f64, seed: u64) -> String {
             let noise: f64 = rng.random_range(-1.0..1.0) * 0.0007 * 3.0_f64.sqrt();
             writeln!(csv, "{t:.3},{:.6},{u:.6}", q + noise).expect("writes to a string");
         }
-        let h = 1e-3;
-        let (k1q, k1v) = (v, accel(q, v, u));
-        let (k2q, k2v) = (v + 0.5 * h * k1v, accel(q + 0.5 * h * k1q, v + 0.5 * h * k1v, u));
-        let (k3q, k3v) = (v + 0.5 * h * k2v, accel(q + 0.5 * h * k2q, v + 0.5 * h * k2v, u));
-        let (k4q, k4v) = (v + h * k3v, accel(q + h * k3q, v + h * k3v, u));
-        q += h / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
-        v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+        [q, v, _, _] = rk4_step([q, v, 0.0, 0.0], t, 1e-3, &|s, _| [s[1], accel(s[0], s[1], u), 0.0, 0.0]);
         // The stops: the lid lands and stays (until pushed off).
         if q <= 0.0 || q >= 1.9 {
             q = q.clamp(0.0, 1.9);

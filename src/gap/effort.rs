@@ -967,6 +967,12 @@ fn merged(cols: &[usize], base: &[usize], theta_b: &[f64], theta_c: &[f64]) -> V
     cols.iter().map(|col| if base.binary_search(col).is_ok() { b.next() } else { c.next() }.copied().unwrap_or(0.0)).collect()
 }
 
+/// Whether `gain` beats `best` by more than a tie: ties (look-alike laws, whose held-out cuts
+/// differ in the fourth digit) go to the one weighed first, whatever the gains' sign.
+fn outgains(gain: f64, best: f64) -> bool {
+    gain > best + 1e-3 * best.abs() + 1e-12
+}
+
 /// Entries kept in each of [`EffortProblem`]'s caches before it starts afresh (a bound on their
 /// memory: an entry holds a few dozen numbers).
 const MAX_CACHED: usize = 200_000;
@@ -2819,8 +2825,7 @@ impl EffortProblem<'_> {
                 continue;
             }
             let slot = best_of.entry((cand.row, cand.family)).or_insert(*w);
-            // Ties (look-alike laws) go to the earlier candidate, whatever the gain's sign.
-            if w.gain > slot.gain + 1e-3 * slot.gain.abs() + 1e-12 {
+            if outgains(w.gain, slot.gain) {
                 *slot = *w;
             }
         }
@@ -2835,23 +2840,20 @@ impl EffortProblem<'_> {
                     .map(move |(_, second)| (first.candidate.min(second.candidate), first.candidate.max(second.candidate)))
             })
             .collect();
-        let passing: Vec<(Vec<usize>, f64)> =
+        let passing: Vec<(Vec<usize>, f64, Evaluation)> =
             pairs.into_iter().collect::<Vec<_>>().into_par_iter().filter_map(|(a, b)| self.pair_step(chosen, current, a, b)).collect();
-        let mut best: Option<(Vec<usize>, f64)> = None;
-        for (set, gain) in passing {
-            if best.as_ref().is_none_or(|(_, best_gain)| gain > best_gain * 1.001 + 1e-12) {
-                best = Some((set, gain));
+        let mut best: Option<(Vec<usize>, f64, Evaluation)> = None;
+        for (set, gain, e) in passing {
+            if best.as_ref().is_none_or(|(_, best_gain, _)| outgains(gain, *best_gain)) {
+                best = Some((set, gain, e));
             }
         }
-        best.map(|(set, _)| {
-            let e = self.evaluate(&set);
-            (set, e)
-        })
+        best.map(|(set, _, e)| (set, e))
     }
 
-    /// The set [`Self::best_pair`] reaches from `chosen` with candidates a and b, and the pair's
-    /// held-out cut, where the pair passes.
-    fn pair_step(&self, chosen: &[usize], current: &Evaluation, a: usize, b: usize) -> Option<(Vec<usize>, f64)> {
+    /// The set [`Self::best_pair`] reaches from `chosen` with candidates a and b, the pair's
+    /// held-out cut and the set's evaluation, where the pair passes.
+    fn pair_step(&self, chosen: &[usize], current: &Evaluation, a: usize, b: usize) -> Option<(Vec<usize>, f64, Evaluation)> {
         let rows = rows_of_both(&self.rows_of(a), &self.rows_of(b));
         let with_pair = self.with(&self.with(chosen, a), b);
         let e = self.evaluate(&with_pair);
@@ -2869,7 +2871,7 @@ impl EffortProblem<'_> {
             // A base tilt refits every joint it loads: the error summed over them may not rise
             // (as for a single step, `weigh_steps`).
             let tilt_holds = ![a, b].iter().any(|&x| self.candidates[x].is_base_tilt()) || e.total_sse() <= current.total_sse();
-            return (self.cut_passes(gain, fold_share) && tilt_holds && each_passes(chosen, &e)).then_some((with_pair, gain));
+            return (self.cut_passes(gain, fold_share) && tilt_holds && each_passes(chosen, &e)).then_some((with_pair, gain, e));
         }
         // In place of the first of the joint's terms (in the order they entered) that fails
         // beside the pair, judged as a swap is (`replace`): over the rows of all three, and the
@@ -2883,7 +2885,8 @@ impl EffortProblem<'_> {
         let e = self.evaluate(&set);
         let swap_rows = rows_of_both(&rows, &self.rows_of(displaced));
         let (gain, fold_share) = self.held_out_cut(current, &e, &swap_rows, judged_as);
-        (self.cut_passes(gain, fold_share) && each_passes(&base, &e) && e.total_sse() <= current.total_sse()).then_some((set, gain))
+        let passes = self.cut_passes(gain, fold_share) && each_passes(&base, &e) && e.total_sse() <= current.total_sse();
+        passes.then_some((set, gain, e))
     }
 
     /// The candidate not `banned` that passes and cuts the held-out error most against
@@ -2913,8 +2916,7 @@ impl EffortProblem<'_> {
         };
         let mut best: Option<(usize, f64)> = None;
         for Weighed { candidate: c, gain, .. } in weighed.into_iter().filter(|w| w.passes) {
-            // Ties (look-alike kinds) go to the earlier candidate.
-            if best.is_none_or(|(_, best_gain)| gain > best_gain * 1.001 + 1e-12) {
+            if best.is_none_or(|(_, best_gain)| outgains(gain, best_gain)) {
                 best = Some((c, gain));
             }
         }
@@ -2935,11 +2937,11 @@ impl EffortProblem<'_> {
                     || self.candidates[c].unresolved.is_some()
                     || self.may_enter(chosen, c) == whole_refinements)
             })
-            .filter_map(|c| {
+            .map(|c| {
                 let rows = self.rows_of(c);
                 let e = self.evaluate_beside(&self.with(chosen, c), c, &rows);
                 let (gain, fold_share) = self.held_out_cut(current, &e, &rows, c);
-                let failed = Some(Weighed { candidate: c, gain, passes: false });
+                let failed = Weighed { candidate: c, gain, passes: false };
                 if !self.cut_passes(gain, fold_share) {
                     return failed;
                 }
@@ -2949,7 +2951,7 @@ impl EffortProblem<'_> {
                     return failed;
                 }
                 let v = self.verdict(current, &e, &rows, c, self.family_member(chosen, c));
-                Some(Weighed { candidate: c, gain: v.gain, passes: self.passes(&v) })
+                Weighed { candidate: c, gain: v.gain, passes: self.passes(&v) }
             })
             .collect()
     }
@@ -3007,7 +3009,7 @@ impl EffortProblem<'_> {
                 .collect();
             // Ties go to the earlier swap (chosen order, then candidate order).
             let best = swaps.into_iter().fold(None::<(f64, Vec<usize>)>, |best, (gain, set)| match best {
-                Some((g, _)) if gain <= g * 1.001 + 1e-12 => best,
+                Some((g, _)) if !outgains(gain, g) => best,
                 _ => Some((gain, set)),
             });
             let Some((_, set)) = best else { break };
