@@ -203,19 +203,30 @@ const LID: &str = r#"<robot name="chest"><link name="box"/>
     <limit lower="0" upper="1.9" effort="1000" velocity="100"/></joint>
 </robot>"#;
 
-/// [`LID`] `scale` × as heavy (inertia and weight) with viscous damping `damping` N·m·s/rad,
-/// released at 0.6 rad, then pushed by a hand toward random openings a little past either stop
-/// (a PD holding the modelled weight, effort within ±4.5 N·m, decided every 0.1 s and held) for
-/// 0.6–1.2 s at a time, let go for 0.5–1.0 s in between: it falls shut or open onto its stops
-/// (inelastic) and rests there.
-/// RK4 at 1 ms, logged at 200 Hz with 0.7 mrad of encoder noise, seeded.
-fn lid_csv(scale: f64, damping: f64, seed: u64) -> String {
+/// How [`LID`]'s hinge resists: viscous damping (N·m·s/rad) and dry friction (N·m) that holds the
+/// lid exactly while the rest of the effort on it stays within that level.
+#[derive(Clone, Copy)]
+struct Hinge {
+    damping: f64,
+    friction: f64,
+}
+
+/// [`LID`] `scale` × as heavy (inertia and weight) on a `hinge` of its own, released at 0.6 rad,
+/// then pushed by a hand toward random openings a little past either stop (a PD holding the
+/// modelled weight, effort within ±4.5 N·m beyond twice the hinge's friction, decided every 0.1 s
+/// and held) for 0.6–1.2 s at a time, let go for 0.5–1.0 s in between: it falls shut or open onto
+/// its stops (inelastic) and rests there, or where its friction holds it. RK4 at 1 ms (the friction of the step's start
+/// held through it; friction stops the lid rather than turning it round), logged at 200 Hz with
+/// 0.7 mrad of encoder noise, seeded.
+fn lid_csv(scale: f64, hinge: Hinge, seed: u64) -> String {
     let (mass, lever, rise, inertia_com) = (1.5, 0.2, 0.01, 0.02005);
     let inertia = inertia_com + mass * (lever * lever + rise * rise);
     // The effort that holds the modelled lid still at q (its centre of mass at height
     // lever·sin q + rise·cos q).
     let weight = |q: f64| mass * 9.81 * (lever * q.cos() - rise * q.sin());
-    let accel = |q: f64, v: f64, u: f64| (u - scale * weight(q) - damping * v) / (scale * inertia);
+    let accel = |q: f64, v: f64, u: f64, dry: f64| (u - scale * weight(q) - hinge.damping * v - dry) / (scale * inertia);
+    // The hand's reach: 4.5 N·m beyond twice what the hinge's friction holds.
+    let reach = 4.5 + 2.0 * hinge.friction;
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     let (mut q, mut v, mut u) = (0.6_f64, 0.0_f64, 0.0);
     let (mut pushing, mut phase_end, mut target) = (false, 0.3, 0.6);
@@ -228,13 +239,22 @@ fn lid_csv(scale: f64, damping: f64, seed: u64) -> String {
                 phase_end = t + if pushing { rng.random_range(0.6..1.2) } else { rng.random_range(0.5..1.0) };
                 target = rng.random_range(-0.2..2.1);
             }
-            u = if pushing { (8.0 * (target - q) - 1.5 * v + weight(q)).clamp(-4.5, 4.5) } else { 0.0 };
+            u = if pushing { (8.0 * (target - q) - 1.5 * v + weight(q)).clamp(-reach, reach) } else { 0.0 };
         }
         if step % 5 == 0 {
             let noise: f64 = rng.random_range(-1.0..1.0) * 0.0007 * 3.0_f64.sqrt();
             writeln!(csv, "{t:.3},{:.6},{u:.6}", q + noise).expect("writes to a string");
         }
-        [q, v, _, _] = rk4_step([q, v, 0.0, 0.0], t, 1e-3, &|s, _| [s[1], accel(s[0], s[1], u), 0.0, 0.0]);
+        let net = u - scale * weight(q);
+        if v == 0.0 && net.abs() <= hinge.friction {
+            continue;
+        }
+        let dry = hinge.friction * if v == 0.0 { net.signum() } else { v.signum() };
+        let before = v;
+        [q, v, _, _] = rk4_step([q, v, 0.0, 0.0], t, 1e-3, &|s, _| [s[1], accel(s[0], s[1], u, dry), 0.0, 0.0]);
+        if before != 0.0 && v.signum() != before.signum() && hinge.friction > 0.0 {
+            v = 0.0;
+        }
         // The stops: the lid lands and stays (until pushed off).
         if q <= 0.0 || q >= 1.9 {
             q = q.clamp(0.0, 1.9);
@@ -244,25 +264,54 @@ fn lid_csv(scale: f64, damping: f64, seed: u64) -> String {
     csv
 }
 
-#[test]
-fn a_heavier_lid_with_a_damped_hinge_is_named_both_though_neither_passes_alone() {
-    // Regression (Genesis's lid at seed 4, JAX-sim's lids: nothing named, `unknown` at 70 % of
-    // the effort): the model's first moments take the heavier lid's weight, so alone it reads as
-    // inertia and the damping alone is fitted too strong; each failed the held-out blocks without
-    // the other. At these seeds the release before named dry friction or a soft-close and
-    // `unknown` instead (36 of 40 seeds were right; all 40 now).
+/// [`LID`] `scale` × as heavy on `hinge`, at each of `seeds`: exactly the two `expected` effects
+/// (kind, parameter, truth) are named, each within 10 % of its truth.
+fn check_lid(scale: f64, hinge: Hinge, seeds: &[u64], expected: [(&str, &str, f64); 2]) {
     let model = parse_model(LID, Path::new("chest.urdf")).expect("model parses");
-    for seed in [3, 14, 27, 38] {
-        let rec = parse_recording(&lid_csv(1.3, 0.2, seed), Path::new("lid.csv")).expect("parses");
+    for &seed in seeds {
+        let rec = parse_recording(&lid_csv(scale, hinge, seed), Path::new("lid.csv")).expect("parses");
         let report = analyze(&model, &rec, &GapConfig::default()).expect("analyses");
         let found: Vec<String> = report.effects.iter().map(|e| format!("{}:{} {:?}", e.joint, e.kind, e.params)).collect();
-        eprintln!("FIGURES heavier_damped_lid seed {seed} | found {found:?} | {:?}", report.joints["lid_hinge"].rejected);
+        eprintln!("FIGURES lid seed {seed} | found {found:?} | {:?}", report.joints["lid_hinge"].rejected);
         assert_eq!(report.effects.len(), 2, "seed {seed}: {found:?}");
-        for (kind, param, truth) in [("mass_scale", "scale", 1.3), ("viscous_damping", "damping", 0.2)] {
+        for (kind, param, truth) in expected {
             let e = report.effects.iter().find(|e| e.kind == kind).unwrap_or_else(|| panic!("seed {seed}: no {kind}: {found:?}"));
             assert!((e.params[param] - truth).abs() <= 0.1 * truth, "seed {seed}: {found:?}");
         }
     }
+}
+
+/// Broke (Genesis's lid at seed 4, JAX-sim's lids: nothing named, `unknown` at 70 % of the
+/// effort): the model's first moments take the heavier lid's weight, so alone it reads as inertia
+/// and the damping alone is fitted too strong; each failed the held-out blocks without the other.
+/// At these seeds the release before named dry friction or a soft-close and `unknown` instead (36
+/// of 40 seeds were right; all 40 now).
+#[test]
+fn a_heavier_lid_with_a_damped_hinge_is_named_both_though_neither_passes_alone() {
+    check_lid(
+        1.3,
+        Hinge { damping: 0.2, friction: 0.0 },
+        &[3, 14, 27, 38],
+        [("mass_scale", "scale", 1.3), ("viscous_damping", "damping", 0.2)],
+    );
+}
+
+/// Broke: a heavier lid whose dry hinge holds it at rest much of the time (Bullet's lid at seed 1,
+/// held 78 % of its usable samples) was read as viscous damping and `unknown` at 54 %: at rest the
+/// residual is whatever holds the lid, and a reading through those samples named neither the
+/// friction nor the weight. Rests were left out only where a reading had named dry friction and a
+/// third of the samples stayed. A joint that dwells at rest and is left unexplained is now read
+/// again without its rests, the reading kept where it names dry friction that holds them. Of 40
+/// seeds of this lid, 15 were read right before and 32 now; these four were dry friction at twice
+/// its level with `unknown`, or dry friction, a soft-close and `unknown`.
+#[test]
+fn a_heavier_lid_that_its_dry_hinge_holds_at_rest_is_named_both() {
+    check_lid(
+        1.3,
+        Hinge { damping: 0.0, friction: 1.2 },
+        &[4, 17, 21, 38],
+        [("mass_scale", "scale", 1.3), ("coulomb_friction", "friction", 1.2)],
+    );
 }
 
 #[test]

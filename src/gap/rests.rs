@@ -29,6 +29,14 @@
 //! without the rests the whole recording's reading finds), and the readings are made again. The
 //! joint's Coulomb candidates then keep the transition read with the rests, and no Stribeck law
 //! is tried: its break-away, like the transition, lives in the samples left out.
+//!
+//! The rests can also be what keeps a reading from naming the friction that holds them, or from
+//! explaining the joint at all: stuck, the residual is whatever holds the joint. So a joint that
+//! dwells at rest ([`dwelling_rests`]) and whose reading leaves a material share of its effort
+//! unexplained is read again without its rests, down to a twentieth of its samples, and that
+//! reading is kept only where it names Coulomb friction that could hold them, as [`held_rests`]
+//! judges it (`effort_mode::without_unexplained_rests`): a reading consistent with its own
+//! exclusions.
 
 use super::effects::EffectKind;
 use super::effort::{JointFinding, SelectionRules, dry_friction_at_rest, rms};
@@ -61,6 +69,22 @@ pub fn held_rests(finding: &JointFinding, speed: &[f64], used: &[bool], rules: &
     if level < rules.min_held_friction_over_gravity * finding.gravity_rms {
         return None;
     }
+    Some(HeldRests { rests: dwelling_rests(speed, used, rules)?.rests, transition_speed })
+}
+
+/// Where a joint dwells at rest ([`dwelling_rests`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dwelling {
+    /// Per sample: a rest.
+    pub rests: Vec<bool>,
+    /// The speed below which the joint counts as at rest (rad/s or m/s).
+    pub rest_speed: f64,
+}
+
+/// Where the joint rests, if it dwells at rest (see the module documentation); None where it
+/// does not. `speed` and `used` as for [`held_rests`].
+#[must_use]
+pub fn dwelling_rests(speed: &[f64], used: &[bool], rules: &SelectionRules) -> Option<Dwelling> {
     let kept: Vec<f64> = speed.iter().zip(used).filter(|(v, u)| **u && v.is_finite()).map(|(v, _)| *v).collect();
     if kept.is_empty() {
         return None;
@@ -72,7 +96,7 @@ pub fn held_rests(finding: &JointFinding, speed: &[f64], used: &[bool], rules: &
     if below == 0 || below as f64 <= rules.min_dwell_ratio * next as f64 {
         return None;
     }
-    Some(HeldRests { rests: speed.iter().zip(used).map(|(v, u)| *u && v.abs() < slow).collect(), transition_speed })
+    Some(Dwelling { rests: speed.iter().zip(used).map(|(v, u)| *u && v.abs() < slow).collect(), rest_speed: slow })
 }
 
 #[cfg(test)]
