@@ -1522,13 +1522,12 @@ impl EffortProblem<'_> {
         let unit = if rotational { "rad/s" } else { "m/s" };
         // The narrowest transition is kept on any joint, so that a law is always tried.
         let widest = if rotational { self.rules.max_transition_speed.0 } else { self.rules.max_transition_speed.1 };
-        // Without its rests, the row keeps the transition read with them (where it was), and tries
-        // no Stribeck law (its break-away lives in the rests too: [`super::rests`]).
-        let rests_out = self.rests.get(r).copied().flatten();
-        let held = rests_out.map(|h| h.transition_speed);
+        // Without its rests, the row keeps the transition it was given with them, and tries no
+        // Stribeck law (its break-away lives in the rests too: [`super::rests`]).
+        let held = self.rests.get(r).copied().flatten().map(|h| h.transition_speed);
         // Per Stribeck speed tried, why the recording cannot tell its law (either reading) from
         // Coulomb's.
-        let stribeck_grid: &[f64] = if rests_out.is_some() { &[] } else { &STRIBECK_GRID };
+        let stribeck_grid: &[f64] = if held.is_some() { &[] } else { &STRIBECK_GRID };
         let unresolved: Vec<Option<String>> = stribeck_grid
             .iter()
             .map(|&m| {
