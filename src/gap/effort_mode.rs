@@ -12,10 +12,10 @@ use super::chain::{ChainInput, instability_rate, replay};
 use super::effects::{Effect, EffectKind, JointPhysics};
 use super::effort::{Bandwidth, EffortProblem, Exclusions, HELD_OUT_HORIZON_S, JointFinding, ModelReading, RestsLeftOut, RowInfo};
 use super::effort::{SelectionRules, Signals, Terms, signals};
-use super::effort::{dry_friction_at_rest, in_serial_chain, moving_part};
+use super::effort::{in_serial_chain, moving_part};
 use super::locate::{Span, mismatch_spans, rmse_over};
 use super::report::{self, Conditions, EffectReport, JointSeries, Mismatch, RmsePair};
-use super::rests::{dwelling_rests, held_rests};
+use super::rests::{coulomb_at_rest, dwelling_rests, held_rests};
 use super::smooth::Smoother;
 use super::stops::{FoundStop, StopRules, find_stops};
 use super::tilt::{base_lean, world_from_base};
@@ -456,10 +456,11 @@ fn without_rests(
     excluded: &Exclusions,
     rules: &SelectionRules,
 ) -> Option<Exclusions> {
-    leave_out_rests(rows, sig, excluded, rules.min_kept_without_rests, |r, speed, used| {
+    let (out, _) = leave_out_rests(rows, sig, excluded, rules.min_kept_without_rests, |r, speed, used| {
         let held = held_rests(findings.get(r)?, speed, used, rules)?;
         Some((held.rests, held.transition_speed))
-    })
+    })?;
+    Some(out)
 }
 
 /// `excluded` with the rests of each row that dwells at rest ([`dwelling_rests`]) while the
@@ -486,38 +487,34 @@ fn without_unexplained_rests(
     excluded: &Exclusions,
     rules: &SelectionRules,
 ) -> Option<(Exclusions, Vec<usize>)> {
-    let out = leave_out_rests(rows, sig, excluded, rules.min_kept_without_unexplained_rests, |r, speed, used| {
+    leave_out_rests(rows, sig, excluded, rules.min_kept_without_unexplained_rests, |r, speed, used| {
         let f = findings.get(r)?;
         if !unexplained(rules, &f.with_friction_at_rest(speed)) {
             return None;
         }
         let dwelling = dwelling_rests(speed, used, rules)?;
-        let read = f.effects.iter().find(|e| e.kind == EffectKind::CoulombFriction).and_then(dry_friction_at_rest);
-        let transition_speed =
-            read.map(|(_, speed)| speed).filter(|speed| speed.is_finite() && *speed > 0.0).unwrap_or(dwelling.rest_speed);
+        let transition_speed = coulomb_at_rest(f).map_or(dwelling.rest_speed, |(_, speed)| speed);
         Some((dwelling.rests, transition_speed))
-    })?;
-    let tried = (0..rows.len()).filter(|&r| out.rests[r].is_some() && excluded.rests.get(r).copied().flatten().is_none()).collect();
-    Some((out, tried))
+    })
 }
 
 /// `excluded` with the rests `rests_of` gives a row (from its index, its smoothed speed and the
 /// samples its row uses: the rests, and the transition speed of the dry friction read with them
 /// or the speed it turns within) left out too, widened by the filters' support (every filtered
-/// term there blends the rest in), where the row keeps `min_kept` of the usable samples; None
-/// where no row not yet without its rests has such rests.
+/// term there blends the rest in), where the row keeps `min_kept` of the usable samples, with the
+/// rows so left out; None where no row not yet without its rests has such rests.
 fn leave_out_rests(
     rows: &[RowInfo],
     sig: &Signals,
     excluded: &Exclusions,
     min_kept: f64,
     rests_of: impl Fn(usize, &[f64], &[bool]) -> Option<(Vec<bool>, f64)>,
-) -> Option<Exclusions> {
+) -> Option<(Exclusions, Vec<usize>)> {
     let n = sig.time_s.len();
     let usable = sig.usable.iter().filter(|&&u| u).count().max(1) as f64;
     let rests_before = |r: usize| excluded.rests.get(r).copied().flatten();
     let mut out = Exclusions { samples: excluded.samples.clone(), rests: (0..rows.len()).map(rests_before).collect() };
-    let mut any = false;
+    let mut left_out = Vec::new();
     for (r, info) in rows.iter().enumerate() {
         if rests_before(r).is_some() {
             continue;
@@ -533,9 +530,9 @@ fn leave_out_rests(
         let share = (0..n).filter(|&i| used[i] && mask[i]).count() as f64 / usable;
         out.samples[r] = mask;
         out.rests[r] = Some(RestsLeftOut { transition_speed, share });
-        any = true;
+        left_out.push(r);
     }
-    any.then_some(out)
+    (!left_out.is_empty()).then_some((out, left_out))
 }
 
 /// A training reading without one term, replayed ([`HeldOutReplay::replay_without`]).

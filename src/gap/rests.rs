@@ -61,15 +61,21 @@ pub struct HeldRests {
 /// over the samples it keeps.
 #[must_use]
 pub fn held_rests(finding: &JointFinding, speed: &[f64], used: &[bool], rules: &SelectionRules) -> Option<HeldRests> {
-    let law = finding.effects.iter().find(|e| e.kind == EffectKind::CoulombFriction)?;
-    let (level, transition_speed) = dry_friction_at_rest(law)?;
-    if !(level > 0.0 && transition_speed.is_finite() && transition_speed > 0.0) {
-        return None;
-    }
+    let (level, transition_speed) = coulomb_at_rest(finding)?;
     if level < rules.min_held_friction_over_gravity * finding.gravity_rms {
         return None;
     }
     Some(HeldRests { rests: dwelling_rests(speed, used, rules)?.rests, transition_speed })
+}
+
+/// The static level and the transition speed of the Coulomb friction (`coulomb_friction`) of the
+/// reading `finding`, where it names one with a positive level and a finite positive transition;
+/// None otherwise.
+#[must_use]
+pub fn coulomb_at_rest(finding: &JointFinding) -> Option<(f64, f64)> {
+    let law = finding.effects.iter().find(|e| e.kind == EffectKind::CoulombFriction)?;
+    let (level, transition_speed) = dry_friction_at_rest(law)?;
+    (level > 0.0 && transition_speed.is_finite() && transition_speed > 0.0).then_some((level, transition_speed))
 }
 
 /// Where a joint dwells at rest ([`dwelling_rests`]).
