@@ -314,6 +314,18 @@ fn a_heavier_lid_that_its_dry_hinge_holds_at_rest_is_named_both() {
     );
 }
 
+/// Broke: the same lid, held at rest so long that leaving its rests out kept under the third of
+/// the samples the first pass needs, while its reading with them explained the efforts (so the
+/// second pass, for rests that keep a reading from explaining a joint, was not tried): the rests
+/// held the friction low and the weight high (seed 1: 0.971 N·m and ×1.366, seed 16: 0.919 and
+/// ×1.486). Rests that the reading's friction holds are now read without down to the second
+/// pass's floor too, kept where both readings, the whole recording's and the training part's,
+/// name friction that holds them (of 40 seeds, 32 → 34 read right).
+#[test]
+fn a_lid_held_at_rest_too_long_for_the_first_rest_pass_is_read_without_its_rests() {
+    check_lid(1.3, Hinge { damping: 0.0, friction: 1.2 }, &[1, 16], [("mass_scale", "scale", 1.3), ("coulomb_friction", "friction", 1.2)]);
+}
+
 #[test]
 fn a_heavier_drawer_is_armature_for_its_weight_does_no_work() {
     // The spec: inertia alone, without weight, is armature; a horizontal drawer's weight does no

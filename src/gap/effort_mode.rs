@@ -413,9 +413,11 @@ type TrainReading<'a> = (Option<(EffortProblem<'a>, Terms)>, Option<Vec<JointFin
 /// the same rests so that its candidates are the whole reading's term for term (the held-out
 /// replay's settling reads one in the other's terms: `EffortProblem::read_as`); the held-out part
 /// takes part in choosing which samples are rests and the transition kept. Then rows whose rests
-/// may keep the reading from explaining them ([`without_unexplained_rests`]) are read again
-/// without them, kept where the reading then names Coulomb friction that could hold those rests
-/// ([`held_rests`]). Where either reading fails without the rests, both stay as they were.
+/// may keep the reading from explaining them, or whose held rests the first pass kept for want of
+/// samples ([`without_unexplained_rests`]), are read again without them, kept where the reading
+/// then names Coulomb friction that could hold those rests ([`held_rests`]), and for a row its
+/// reading with the rests explained, where the training part's reading does too. Where either
+/// reading fails without the rests, both stay as they were.
 fn read_without_rests<'a>(
     read_whole: &(impl Fn(&Exclusions, Option<EffortProblem<'a>>) -> Option<WholeReading<'a>> + Sync),
     read_train: &(impl Fn(&Exclusions) -> TrainReading<'a> + Sync),
@@ -438,10 +440,18 @@ fn read_without_rests<'a>(
         return (whole, train);
     };
     let n = sig.time_s.len();
+    // The new reading must name friction that could hold the rests. A row its reading with the
+    // rests explained went below the first pass's floor ([`SelectionRules::min_kept_without_rests`])
+    // for its rests alone, and that floor guards the training part's reading, whose replay judges
+    // the held-out part: there the training part's reading must hold them too.
     let holds = |r: usize| {
-        let (Some(info), Some(f)) = (w.0.rows().get(r), w.2.get(r)) else { return false };
+        let (Some(info), Some(f), Some(before)) = (w.0.rows().get(r), w.2.get(r), whole.2.get(r)) else { return false };
         let used: Vec<bool> = (0..n).map(|i| sig.usable[i] && !excluded.samples[r][i]).collect();
-        held_rests(f, &sig.speed(info.dof), &used, rules).is_some()
+        let speed = sig.speed(info.dof);
+        let held = |f: &JointFinding| held_rests(f, &speed, &used, rules).is_some();
+        let explained = !unexplained(rules, &before.with_friction_at_rest(&speed));
+        let train_holds = !explained || t.1.as_ref().is_none_or(|found| found.get(r).is_some_and(held));
+        held(f) && train_holds
     };
     if tried.iter().all(|&r| holds(r)) { (w, t) } else { (whole, train) }
 }
@@ -465,15 +475,17 @@ fn without_rests(
 
 /// `excluded` with the rests of each row that dwells at rest ([`dwelling_rests`]) while the
 /// reading `findings` leaves a material share of its effort unexplained ([`unexplained`], dry
-/// friction granted its whole range at rest) left out too ([`leave_out_rests`], keeping
-/// [`SelectionRules::min_kept_without_unexplained_rests`]), with those rows; None where no row
-/// is such. What holds a joint at rest can be what keeps a reading from explaining it: stuck, the
-/// residual is whatever holds the joint, often of the other sign to what the motion shows
-/// (Bullet's heavier lid, held near upright by its hinge's friction for 78 % of the usable
-/// samples, was read with its rests as viscous damping and `unknown` at 54 %; without them, numpy
-/// on the same residual: the heavier lid and a Coulomb level of 1.203 against the truth's 1.2), and
-/// a reading that names the friction may still be pulled off its level and the part's weight by
-/// rests too many for [`SelectionRules::min_kept_without_rests`]. The Coulomb candidates keep the
+/// friction granted its whole range at rest), or whose rests that reading's friction holds
+/// ([`held_rests`]) but [`without_rests`] kept for want of samples, left out too
+/// ([`leave_out_rests`], keeping [`SelectionRules::min_kept_without_unexplained_rests`]), with
+/// those rows; None where no row is such. What holds a joint at rest can be what keeps a reading
+/// from explaining it: stuck, the residual is whatever holds the joint, often of the other sign
+/// to what the motion shows (Bullet's heavier lid, held near upright by its hinge's friction for
+/// 78 % of the usable samples, was read with its rests as viscous damping and `unknown` at 54 %;
+/// without them, numpy on the same residual: the heavier lid and a Coulomb level of 1.203 against
+/// the truth's 1.2), and a reading that names the friction may still be pulled off its level and
+/// the part's weight by rests too many for [`SelectionRules::min_kept_without_rests`] (the `MuJoCo`
+/// Panda stuck by its friction: joint 2's damping unnamed and its friction 12 % high). The Coulomb candidates keep the
 /// transition of the dry friction read with the rests, or, without one, the speed below which the
 /// joint counts as at rest (a law that holds it there turns within it). The reading is kept only
 /// where it then names Coulomb friction that could hold these rests, as [`held_rests`] judges it
@@ -489,7 +501,9 @@ fn without_unexplained_rests(
 ) -> Option<(Exclusions, Vec<usize>)> {
     leave_out_rests(rows, sig, excluded, rules.min_kept_without_unexplained_rests, |r, speed, used| {
         let f = findings.get(r)?;
-        if !unexplained(rules, &f.with_friction_at_rest(speed)) {
+        // Rests that keep the reading from explaining the joint, or rests its dry friction holds
+        // that the first pass kept for want of samples.
+        if !unexplained(rules, &f.with_friction_at_rest(speed)) && held_rests(f, speed, used, rules).is_none() {
             return None;
         }
         let dwelling = dwelling_rests(speed, used, rules)?;
