@@ -444,16 +444,15 @@ fn read_without_rests<'a>(
     // rests explained went below the first pass's floor ([`SelectionRules::min_kept_without_rests`])
     // for its rests alone, and that floor guards the training part's reading, whose replay judges
     // the held-out part: there the training part's reading must hold them too.
-    let holds = |r: usize| {
-        let (Some(info), Some(f), Some(before)) = (w.0.rows().get(r), w.2.get(r), whole.2.get(r)) else { return false };
+    let holds = |&(r, explained): &(usize, bool)| {
+        let (Some(info), Some(f)) = (w.0.rows().get(r), w.2.get(r)) else { return false };
         let used: Vec<bool> = (0..n).map(|i| sig.usable[i] && !excluded.samples[r][i]).collect();
         let speed = sig.speed(info.dof);
         let held = |f: &JointFinding| held_rests(f, &speed, &used, rules).is_some();
-        let explained = !unexplained(rules, &before.with_friction_at_rest(&speed));
         let train_holds = !explained || t.1.as_ref().is_none_or(|found| found.get(r).is_some_and(held));
         held(f) && train_holds
     };
-    if tried.iter().all(|&r| holds(r)) { (w, t) } else { (whole, train) }
+    if tried.iter().all(holds) { (w, t) } else { (whole, train) }
 }
 
 /// `excluded` with the rests that dry friction holds ([`super::rests`]) of each row of the
@@ -468,7 +467,7 @@ fn without_rests(
 ) -> Option<Exclusions> {
     let (out, _) = leave_out_rests(rows, sig, excluded, rules.min_kept_without_rests, |r, speed, used| {
         let held = held_rests(findings.get(r)?, speed, used, rules)?;
-        Some((held.rests, held.transition_speed))
+        Some((held.rests, held.transition_speed, ()))
     })?;
     Some(out)
 }
@@ -478,16 +477,17 @@ fn without_rests(
 /// friction granted its whole range at rest), or whose rests that reading's friction holds
 /// ([`held_rests`]) but [`without_rests`] kept for want of samples, left out too
 /// ([`leave_out_rests`], keeping [`SelectionRules::min_kept_without_unexplained_rests`]), with
-/// those rows; None where no row is such. What holds a joint at rest can be what keeps a reading
+/// those rows, each with whether its reading explained it (tried for its held rests alone); None
+/// where no row is such. What holds a joint at rest can be what keeps a reading
 /// from explaining it: stuck, the residual is whatever holds the joint, often of the other sign
 /// to what the motion shows (Bullet's heavier lid, held near upright by its hinge's friction for
 /// 78 % of the usable samples, was read with its rests as viscous damping and `unknown` at 54 %;
 /// without them, numpy on the same residual: the heavier lid and a Coulomb level of 1.203 against
 /// the truth's 1.2), and a reading that names the friction may still be pulled off its level and
 /// the part's weight by rests too many for [`SelectionRules::min_kept_without_rests`] (the `MuJoCo`
-/// Panda stuck by its friction: joint 2's damping unnamed and its friction 12 % high). The Coulomb candidates keep the
-/// transition of the dry friction read with the rests, or, without one, the speed below which the
-/// joint counts as at rest (a law that holds it there turns within it). The reading is kept only
+/// Panda stuck by its friction: joint 2's damping unnamed and its friction 12 % high). The Coulomb
+/// candidates keep the transition of the dry friction read with the rests, or, without one, the
+/// speed below which the joint counts as at rest (a law that holds it there turns within it). The reading is kept only
 /// where it then names Coulomb friction that could hold these rests, as [`held_rests`] judges it
 /// (its level at least [`SelectionRules::min_held_friction_over_gravity`] of the gravity effort
 /// the joint carries without them): a reading consistent with its own exclusions
@@ -498,32 +498,34 @@ fn without_unexplained_rests(
     sig: &Signals,
     excluded: &Exclusions,
     rules: &SelectionRules,
-) -> Option<(Exclusions, Vec<usize>)> {
+) -> Option<(Exclusions, Vec<(usize, bool)>)> {
     leave_out_rests(rows, sig, excluded, rules.min_kept_without_unexplained_rests, |r, speed, used| {
         let f = findings.get(r)?;
         // Rests that keep the reading from explaining the joint, or rests its dry friction holds
         // that the first pass kept for want of samples.
-        if !unexplained(rules, &f.with_friction_at_rest(speed)) && held_rests(f, speed, used, rules).is_none() {
+        let explained = !unexplained(rules, &f.with_friction_at_rest(speed));
+        if explained && held_rests(f, speed, used, rules).is_none() {
             return None;
         }
         let dwelling = dwelling_rests(speed, used, rules)?;
         let transition_speed = coulomb_at_rest(f).map_or(dwelling.rest_speed, |(_, speed)| speed);
-        Some((dwelling.rests, transition_speed))
+        Some((dwelling.rests, transition_speed, explained))
     })
 }
 
 /// `excluded` with the rests `rests_of` gives a row (from its index, its smoothed speed and the
-/// samples its row uses: the rests, and the transition speed of the dry friction read with them
-/// or the speed it turns within) left out too, widened by the filters' support (every filtered
-/// term there blends the rest in), where the row keeps `min_kept` of the usable samples, with the
-/// rows so left out; None where no row not yet without its rests has such rests.
-fn leave_out_rests(
+/// samples its row uses: the rests, the transition speed of the dry friction read with them or
+/// the speed it turns within, and a note of the caller's on the row) left out too, widened by the
+/// filters' support (every filtered term there blends the rest in), where the row keeps
+/// `min_kept` of the usable samples, with the rows so left out and their notes; None where no row
+/// not yet without its rests has such rests.
+fn leave_out_rests<T>(
     rows: &[RowInfo],
     sig: &Signals,
     excluded: &Exclusions,
     min_kept: f64,
-    rests_of: impl Fn(usize, &[f64], &[bool]) -> Option<(Vec<bool>, f64)>,
-) -> Option<(Exclusions, Vec<usize>)> {
+    rests_of: impl Fn(usize, &[f64], &[bool]) -> Option<(Vec<bool>, f64, T)>,
+) -> Option<(Exclusions, Vec<(usize, T)>)> {
     let n = sig.time_s.len();
     let usable = sig.usable.iter().filter(|&&u| u).count().max(1) as f64;
     let rests_before = |r: usize| excluded.rests.get(r).copied().flatten();
@@ -535,7 +537,7 @@ fn leave_out_rests(
         }
         let speed = sig.speed(info.dof);
         let used: Vec<bool> = (0..n).map(|i| sig.usable[i] && !excluded.samples[r][i]).collect();
-        let Some((rests, transition_speed)) = rests_of(r, &speed, &used) else { continue };
+        let Some((rests, transition_speed, note)) = rests_of(r, &speed, &used) else { continue };
         let mut mask = excluded.samples[r].clone();
         widen_into(&mut mask, &rests, &sig.time_s, sig.band.support_s());
         if ((0..n).filter(|&i| sig.usable[i] && !mask[i]).count() as f64) < min_kept * usable {
@@ -544,7 +546,7 @@ fn leave_out_rests(
         let share = (0..n).filter(|&i| used[i] && mask[i]).count() as f64 / usable;
         out.samples[r] = mask;
         out.rests[r] = Some(RestsLeftOut { transition_speed, share });
-        left_out.push(r);
+        left_out.push((r, note));
     }
     (!left_out.is_empty()).then_some((out, left_out))
 }
