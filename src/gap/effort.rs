@@ -1436,7 +1436,13 @@ pub fn near_reversals(time_s: &[f64], speed: &[f64], half_width_s: f64) -> Vec<b
 /// no more than 1.8× from 0.03× up, for the same reason: with steps of 3× there, Drake's smooth
 /// friction (0.05 rad/s on an iiwa's joints) was read at 0.5-1.8× its transition on half its
 /// joints, with a false viscous damping beside it on eight.
-const TRANSITION_GRID: [f64; 11] = [0.002, 0.01, 0.03, 0.055, 0.1, 0.17, 0.3, 0.42, 0.6, 0.85, 1.2];
+/// Up to 3.4×, as far as the joint's fastest speed: a slow joint's friction can be smooth over
+/// more than its RMS speed and still round off at its fastest (`MuJoCo`'s Panda under the
+/// published law, its joint 5 at 0.11 rad/s RMS and 0.32 at most, smooth over 0.24: with the
+/// grid ending at 1.2× it was read as viscous damping and a lighter part). A law smooth over more
+/// than the joint's fastest speed is straight over every speed recorded, damping's shape, which
+/// the viscous candidate is.
+const TRANSITION_GRID: [f64; 14] = [0.002, 0.01, 0.03, 0.055, 0.1, 0.17, 0.3, 0.42, 0.6, 0.85, 1.2, 1.7, 2.4, 3.4];
 /// Multipliers of the RMS speed for the Stribeck speeds tried.
 const STRIBECK_GRID: [f64; 3] = [0.05, 0.15, 0.4];
 /// Where a Stribeck law departs from its base law while the joint slides: from this many
@@ -1547,8 +1553,12 @@ impl EffortProblem<'_> {
                 })
             })
             .collect();
+        let fastest = (0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][1].abs()).fold(0.0, f64::max);
         let speeds: Vec<f64> = held.map_or_else(
-            || TRANSITION_GRID.iter().enumerate().filter(|&(k, &m)| k == 0 || m * v_rms <= widest).map(|(_, &m)| m * v_rms).collect(),
+            || {
+                let within = |m: f64| m * v_rms <= widest && m * v_rms <= fastest;
+                TRANSITION_GRID.iter().enumerate().filter(|&(k, &m)| k == 0 || within(m)).map(|(_, &m)| m * v_rms).collect()
+            },
             |vs| vec![vs],
         );
         for smoothed in [false, true] {
