@@ -1553,11 +1553,12 @@ impl EffortProblem<'_> {
                 })
             })
             .collect();
-        let fastest = (0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][1].abs()).fold(0.0, f64::max);
         let speeds: Vec<f64> = held.map_or_else(
             || {
-                let within = |m: f64| m * v_rms <= widest && m * v_rms <= fastest;
-                TRANSITION_GRID.iter().enumerate().filter(|&(k, &m)| k == 0 || within(m)).map(|(_, &m)| m * v_rms).collect()
+                // No wider than real joints' friction, nor than the joint's fastest speed.
+                let fastest = (0..n).filter(|&i| ok[i]).map(|i| sig.q[d][i][1].abs()).fold(0.0, f64::max);
+                let reach = widest.min(fastest);
+                TRANSITION_GRID.iter().enumerate().filter(|&(k, &m)| k == 0 || m * v_rms <= reach).map(|(_, &m)| m * v_rms).collect()
             },
             |vs| vec![vs],
         );
